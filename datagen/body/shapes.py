@@ -1,0 +1,92 @@
+"""Body shapes: β sampling from a seed, the thin / regular / fat presets, and body measurements.
+
+Paper 000 makes its bodies by varying SMPL's 2nd and 7th shape components. drape's shape space
+is its own PCA (see :mod:`datagen.body.anny_builder`), so its presets are defined by what they
+are rather than by component numbers: a body of 1.70 m with a BMI of 18.5 (thin), 23 (regular)
+and 31 (fat), found by regressing β on height and BMI over the sampled adult population. Their
+measured heights, masses and BMIs are stored in the model's metadata; ``drape body info``
+prints them. In drape's shape space β1 is height (correlation 1.0 over the population) and β3
+is mostly mass (-0.84): the presets move mainly along β3, as the paper's move along β2 and β7.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from datagen.body.model import BodyModel
+from datagen.errors import InputError
+
+BODY_DENSITY = 985.0
+"""Mean density of the human body [kg/m^3], to turn mesh volume into mass."""
+
+PRESET_TARGETS: dict[str, dict[str, float]] = {
+    "thin": {"height_m": 1.70, "bmi": 18.5},
+    "regular": {"height_m": 1.70, "bmi": 23.0},
+    "fat": {"height_m": 1.70, "bmi": 31.0},
+}
+"""Target height [m] and BMI [kg/m^2] of each preset."""
+
+PRESET_NAMES = tuple(PRESET_TARGETS)
+
+
+def sample_betas(seed: int | np.random.Generator, count: int, shape_dim: int = 10, clip: float = 2.5) -> np.ndarray:
+    """β [count, shape_dim] ~ N(0, I) truncated to ±``clip`` (redrawn, not clamped), from a seed."""
+    if count < 1 or shape_dim < 1:
+        raise InputError(f"count and shape_dim must be positive, got {count} and {shape_dim}")
+    rng = seed if isinstance(seed, np.random.Generator) else np.random.default_rng(seed)
+    out = rng.standard_normal((count, shape_dim))
+    bad = np.abs(out) > clip
+    while bad.any():
+        out[bad] = rng.standard_normal(int(bad.sum()))
+        bad = np.abs(out) > clip
+    return out
+
+
+def preset_betas(model: BodyModel, name: str) -> np.ndarray:
+    """β [shape_dim] of a named preset stored in the model's metadata."""
+    presets = model.meta.get("presets", {})
+    if name not in presets:
+        known = ", ".join(sorted(presets)) or "none (this body file carries no presets; pass β instead)"
+        raise InputError(f"unknown body preset '{name}'; known presets: {known}")
+    return np.asarray(presets[name]["betas"], dtype=np.float64)
+
+
+def resolve_betas(model: BodyModel, body: str | None = None, betas=None, seed: int | None = None) -> np.ndarray:
+    """β [1, shape_dim] from a preset name, explicit values or a seed (exactly one of them)."""
+    given = [x is not None for x in (body, betas, seed)]
+    if sum(given) > 1:
+        raise InputError("give only one of a body preset, β values or a seed")
+    if body is not None:
+        return preset_betas(model, body)[None]
+    if betas is not None:
+        b = np.asarray(betas, dtype=np.float64).reshape(1, -1)
+        if b.shape[1] > model.shape_dim:
+            raise InputError(f"{b.shape[1]} β values given; this body has {model.shape_dim}")
+        out = np.zeros((1, model.shape_dim))
+        out[:, : b.shape[1]] = b
+        return out
+    if seed is not None:
+        return sample_betas(seed, 1, model.shape_dim)
+    return np.zeros((1, model.shape_dim))
+
+
+def measure(vertices: np.ndarray, faces: np.ndarray) -> dict[str, float]:
+    """Height [m] (vertical extent, Y up), volume [m^3], mass [kg] and BMI of a closed body mesh
+    [V, 3] in a pose with straight legs (the rest pose)."""
+    import trimesh
+
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    height = float(vertices[:, 1].max() - vertices[:, 1].min())
+    volume = float(abs(mesh.volume))
+    mass = volume * BODY_DENSITY
+    return {"height_m": height, "volume_m3": volume, "mass_kg": mass, "bmi": mass / height**2}
+
+
+def project_to_betas(model: BodyModel, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Least-squares β [N, S] of rest-pose vertices [N, V, 3], and the residual [N, V] in metres."""
+    D = model.shapedirs.reshape(-1, model.shape_dim)
+    diff = (vertices - model.v_template[None]).reshape(vertices.shape[0], -1)
+    betas, *_ = np.linalg.lstsq(D, diff.T, rcond=None)
+    betas = betas.T
+    resid = np.linalg.norm((diff - betas @ D.T).reshape(vertices.shape), axis=-1)
+    return betas, resid

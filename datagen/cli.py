@@ -1,0 +1,63 @@
+"""The ``drape`` command line. Each capability registers its own subcommands.
+
+Library code logs; this module prints. A :class:`~datagen.errors.DrapeError` is shown as one
+line (``error: ...``) with exit status 2, never as a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import sys
+
+from datagen import __version__
+from datagen.errors import DrapeError
+
+
+class _Formatter(argparse.RawDescriptionHelpFormatter, argparse.ArgumentDefaultsHelpFormatter):
+    pass
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="drape",
+        formatter_class=_Formatter,
+        description="drape makes training data for learned garment animation: SMPL-format bodies, "
+        "garments draped by a Warp cloth simulator, zarr datasets, and the trainers that use them.",
+        epilog="example:\n  drape body build --out body.pkl\n  drape body info",
+    )
+    parser.add_argument("--version", action="version", version=f"drape {__version__}")
+    parser.add_argument("--log-level", default="info", choices=["debug", "info", "warning", "error"],
+                        help="how much progress to print")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    from datagen.body import cli as body_cli
+
+    body_cli.register(sub, _Formatter)
+    try:
+        from datagen.motion import cli as motion_cli
+    except ImportError:  # the motion commands arrive with the motion capability
+        motion_cli = None
+    if motion_cli is not None:
+        motion_cli.register(sub, _Formatter)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    logging.basicConfig(level=getattr(logging, args.log_level.upper()), format="%(message)s", stream=sys.stderr)
+    for noisy in ("anny", "warp", "trimesh"):
+        logging.getLogger(noisy).setLevel(max(logging.WARNING, logging.getLogger().level))
+    try:
+        return int(args.func(args) or 0)
+    except DrapeError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,37 @@
+"""Exceptions for mistakes a user can fix.
+
+The CLI prints a :class:`DrapeError` as one message (no traceback) and exits with status 2; any
+other exception is a bug in drape and keeps its traceback.
+"""
+
+from __future__ import annotations
+
+
+class DrapeError(Exception):
+    """A user-facing error: the message says what is wrong and what to do about it."""
+
+
+class ConfigError(DrapeError, ValueError):
+    """A configuration file or value that is malformed, unknown or out of range."""
+
+
+class InputError(DrapeError, ValueError):
+    """An array or file given to drape that has the wrong shape, values or format."""
+
+
+class MissingDependencyError(DrapeError, ImportError):
+    """An optional dependency that the requested feature needs is not installed."""
+
+
+def require(module: str, feature: str, extra: str | None = None):
+    """Import ``module`` or raise :class:`MissingDependencyError` saying how to install it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError as exc:  # pragma: no cover - exercised by monkeypatching in tests
+        hint = f"pip install 'drape[{extra}]'" if extra else f"pip install {module.split('.')[0]}"
+        raise MissingDependencyError(
+            f"{feature} needs the Python package '{module}', which is not installed ({exc}). "
+            f"Install it with: {hint}"
+        ) from exc

@@ -1,0 +1,1 @@
+"""Motions: rotation conventions, labelled procedural motions, and AMASS/BVH readers."""
