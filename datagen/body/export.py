@@ -93,8 +93,8 @@ def write_mesh(path: str | Path, vertices: np.ndarray, faces: np.ndarray, fmt: s
 
 
 def _write_usd(path: Path, vertices: np.ndarray, faces: np.ndarray) -> None:
-    pxr = require("pxr", "USD export", extra="usd")
-    Usd, UsdGeom, Vt, Gf = pxr.Usd, pxr.UsdGeom, pxr.Vt, pxr.Gf
+    require("pxr", "USD export", extra="usd")
+    from pxr import Gf, Usd, UsdGeom, Vt
     stage = Usd.Stage.CreateNew(str(path))
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
     UsdGeom.SetStageMetersPerUnit(stage, 1.0)

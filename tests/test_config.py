@@ -1,0 +1,80 @@
+from dataclasses import dataclass, field
+
+import pytest
+
+from datagen.config import load_config
+from datagen.errors import ConfigError
+
+
+@dataclass(frozen=True, kw_only=True)
+class Inner:
+    thickness: float = field(default=0.003, metadata={"min": 0.0, "max": 0.05})
+
+
+@dataclass(frozen=True, kw_only=True)
+class Example:
+    iterations: int = field(default=10, metadata={"min": 1, "max": 100})
+    rest_pose: str = field(default="t-pose", metadata={"choices": ("t-pose", "a-pose")})
+    enabled: bool = True
+    sizes: tuple[float, float] = (1.0, 2.0)
+    inner: Inner = field(default_factory=Inner)
+
+
+def write(tmp_path, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    return p
+
+
+def test_toml_and_yaml_load_the_same(tmp_path):
+    a = load_config(Example, write(tmp_path, "a.toml", "iterations = 5\nrest_pose = 'a-pose'\n[inner]\nthickness = 0.01\n"))
+    b = load_config(Example, write(tmp_path, "b.yaml", "iterations: 5\nrest_pose: a-pose\ninner:\n  thickness: 0.01\n"))
+    assert a == b == Example(iterations=5, rest_pose="a-pose", inner=Inner(thickness=0.01))
+
+
+def test_unknown_key_names_key_file_and_allowed(tmp_path):
+    p = write(tmp_path, "c.toml", "iteration = 5\n")
+    with pytest.raises(ConfigError) as e:
+        load_config(Example, p)
+    msg = str(e.value)
+    assert "iteration" in msg and str(p) in msg and "iterations" in msg and "rest_pose" in msg
+
+
+def test_nested_unknown_key_is_dotted(tmp_path):
+    with pytest.raises(ConfigError, match=r"inner\.thick"):
+        load_config(Example, write(tmp_path, "c.toml", "[inner]\nthick = 1.0\n"))
+
+
+@pytest.mark.parametrize(
+    "text, pattern",
+    [
+        ("iterations = 'ten'", r"iterations must be an integer"),
+        ("iterations = 1.5", r"iterations must be an integer"),
+        ("iterations = 0", r"iterations = 0 is out of range; allowed: 1 <= iterations <= 100"),
+        ("rest_pose = 'x-pose'", r"rest_pose = 'x-pose' is not allowed; choose one of \['t-pose', 'a-pose'\]"),
+        ("enabled = 1", r"enabled must be true or false"),
+        ("sizes = 3", r"sizes must be a list"),
+        ("[inner]\nthickness = 0.5", r"inner.thickness = 0.5 is out of range"),
+    ],
+)
+def test_wrong_types_and_ranges(tmp_path, text, pattern):
+    p = write(tmp_path, "d.toml", text + "\n")
+    with pytest.raises(ConfigError, match=pattern) as e:
+        load_config(Example, p)
+    assert str(p) in str(e.value)
+
+
+def test_bad_files(tmp_path):
+    with pytest.raises(ConfigError, match="does not exist"):
+        load_config(Example, tmp_path / "missing.toml")
+    with pytest.raises(ConfigError, match="not valid TOML"):
+        load_config(Example, write(tmp_path, "e.toml", "iterations = = 3"))
+    with pytest.raises(ConfigError, match="use .toml, .yaml or .yml"):
+        load_config(Example, write(tmp_path, "e.json", "{}"))
+
+
+def test_section(tmp_path):
+    p = write(tmp_path, "f.toml", "[solver]\niterations = 7\n")
+    assert load_config(Example, p, section="solver").iterations == 7
+    with pytest.raises(ConfigError, match=r"missing section \[body\]"):
+        load_config(Example, p, section="body")
