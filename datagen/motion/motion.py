@@ -67,7 +67,7 @@ class Motion:
 
     def __post_init__(self) -> None:
         poses = _float_array(self.poses, "poses")
-        if poses.ndim == 2 and poses.shape[1] % 3 == 0:
+        if poses.ndim == 2 and poses.shape[1] % 3 == 0 and poses.shape[1] != JOINT_COUNT:
             poses = poses.reshape(poses.shape[0], -1, 3)
         if poses.ndim != 3 or poses.shape[2] != 3:
             raise InputError(
@@ -271,6 +271,9 @@ class Motion:
         if not os.path.isfile(path):
             raise InputError(f"motion file {os.fspath(path)!r} does not exist; pass the path of an .npz "
                              "written by Motion.save_npz")
+        if not zipfile.is_zipfile(path):
+            raise InputError(f"{os.fspath(path)!r} is not a readable .npz file (not a zip archive); pass "
+                             "an .npz written by Motion.save_npz")
         try:
             with np.load(path, allow_pickle=False) as data:
                 missing = [k for k in NPZ_KEYS if k not in data.files]
