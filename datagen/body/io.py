@@ -25,10 +25,11 @@ import numpy as np
 from datagen.body.model import BodyModel
 from datagen.body.skeleton import kintree_table, parents_from_kintree
 from datagen.errors import InputError
+from schemas.body_file import BODY_FILE_KEYS  # the schema is the single source of truth
 
 logger = logging.getLogger(__name__)
 
-REQUIRED_KEYS = ("v_template", "shapedirs", "posedirs", "J_regressor", "weights", "kintree_table", "f")
+REQUIRED_KEYS = tuple(BODY_FILE_KEYS)
 BODY_FILE_FORMATS = (".npz", ".pkl")
 
 
