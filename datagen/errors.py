@@ -29,7 +29,7 @@ def require(module: str, feature: str, extra: str | None = None):
 
     try:
         return importlib.import_module(module)
-    except ImportError as exc:  # pragma: no cover - exercised by monkeypatching in tests
+    except ImportError as exc:
         hint = f"pip install 'drape[{extra}]'" if extra else f"pip install {module.split('.')[0]}"
         raise MissingDependencyError(
             f"{feature} needs the Python package '{module}', which is not installed ({exc}). "

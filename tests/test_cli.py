@@ -82,3 +82,11 @@ def test_user_errors_are_one_line(capsys, tmp_path, argv, message, default_body)
     argv = [a.replace("OUT", str(tmp_path)) for a in argv]
     code, _, err = run(capsys, *argv)
     assert code == 2 and message in err and "Traceback" not in err
+
+
+def test_missing_optional_dependency_says_how_to_install(capsys, tmp_path, monkeypatch, default_body):
+    import sys
+
+    monkeypatch.setitem(sys.modules, "pxr", None)  # makes `import pxr` fail as if usd-core were absent
+    code, _, err = run(capsys, "body", "export", "--out", str(tmp_path / "a.usda"))
+    assert code == 2 and "needs the Python package 'pxr'" in err and "pip install 'drape[usd]'" in err
