@@ -9,7 +9,6 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.errors import InputError
 
 
 def register(sub, formatter) -> None:

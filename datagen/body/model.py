@@ -10,7 +10,6 @@ J_regressor, weights, kintree_table, f``) in SMPL's conventions: metres, Y up, t
 from __future__ import annotations
 
 import dataclasses
-import logging
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -18,10 +17,8 @@ import numpy as np
 import torch
 
 from datagen.body import lbs as _lbs
-from datagen.body.skeleton import JOINT_COUNT, POSE_BASIS_DIM, SMPL_JOINT_NAMES
+from datagen.body.skeleton import JOINT_COUNT, SMPL_JOINT_NAMES
 from datagen.errors import InputError
-
-logger = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, eq=False)
@@ -195,7 +192,3 @@ class BodyModelTorch(torch.nn.Module):
         return _lbs.lbs(betas, pose, self.v_template, self.shapedirs, self.posedirs, self.J_regressor,
                         self.parents, self.weights, transl)
 
-
-def zero_posedirs_shape(vertex_count: int, joint_count: int = JOINT_COUNT) -> tuple[int, int, int]:
-    """Shape of SMPL's posedirs in a file: [V, 3, 9 (J - 1)]."""
-    return (vertex_count, 3, 9 * (joint_count - 1) if joint_count != JOINT_COUNT else POSE_BASIS_DIM)
