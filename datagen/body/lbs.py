@@ -70,9 +70,7 @@ def lbs_np(
     else:
         v_posed = v_shaped
     posed_joints, rel = rigid_transforms_np(rot, joints, parents)
-    # Blend the [3, 4] transforms by the weights: [B, V, 12].
-    blended = np.matmul(weights, rel[:, :, :3, :].reshape(batch, J, 12)).reshape(batch, -1, 3, 4)
-    verts = _apply_blended(blended, v_posed)
+    verts = blend_skinning(v_posed, weights, rel)
     if transl is not None:
         transl = np.asarray(transl, dtype=dtype).reshape(-1, 1, 3)
         verts = verts + transl
@@ -104,11 +102,16 @@ def rigid_transforms_np(rot: np.ndarray, joints: np.ndarray, parents) -> tuple[n
     return posed_joints, rel
 
 
-def _apply_blended(blended, v):
-    """Apply per-vertex [3, 4] transforms [B, V, 3, 4] to points [B, V, 3] (numpy or torch).
+def blend_skinning(vertices, weights, transforms):
+    """Linear blend skinning of points [B, V, 3] with weights [V, J] and per-joint transforms
+    [B, J, 4, 4] (numpy or torch): ``v' = Σ_j w_vj T_j v``.
 
-    Written as four scaled column sums: a batched 3x3 matmul per vertex is several times slower.
+    The [3, 4] transforms are blended by one matmul, then applied as four scaled column sums: a
+    batched 3x3 matmul per vertex is several times slower.
     """
+    batch, J = transforms.shape[:2]
+    blended = (weights @ transforms[:, :, :3, :].reshape(batch, J, 12)).reshape(batch, -1, 3, 4)
+    v = vertices
     return (blended[..., 0] * v[..., 0:1] + blended[..., 1] * v[..., 1:2]
             + blended[..., 2] * v[..., 2:3] + blended[..., 3])
 
@@ -150,8 +153,7 @@ def lbs(
     else:
         v_posed = v_shaped
     posed_joints, rel = rigid_transforms(rot, joints, parents)
-    blended = torch.matmul(weights, rel[:, :, :3, :].reshape(batch, J, 12)).reshape(batch, -1, 3, 4)
-    verts = _apply_blended(blended, v_posed)
+    verts = blend_skinning(v_posed, weights, rel)
     if transl is not None:
         transl = transl.reshape(-1, 1, 3)
         verts = verts + transl

@@ -81,12 +81,3 @@ def measure(vertices: np.ndarray, faces: np.ndarray) -> dict[str, float]:
     mass = volume * BODY_DENSITY
     return {"height_m": height, "volume_m3": volume, "mass_kg": mass, "bmi": mass / height**2}
 
-
-def project_to_betas(model: BodyModel, vertices: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Least-squares β [N, S] of rest-pose vertices [N, V, 3], and the residual [N, V] in metres."""
-    D = model.shapedirs.reshape(-1, model.shape_dim)
-    diff = (vertices - model.v_template[None]).reshape(vertices.shape[0], -1)
-    betas, *_ = np.linalg.lstsq(D, diff.T, rcond=None)
-    betas = betas.T
-    resid = np.linalg.norm((diff - betas @ D.T).reshape(vertices.shape), axis=-1)
-    return betas, resid

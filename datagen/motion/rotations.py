@@ -165,27 +165,26 @@ def quaternion_to_axis_angle(quaternion: torch.Tensor) -> torch.Tensor:
 
 # ----------------------------------------------------------------------------- quaternion <-> matrix
 
-def quaternion_to_matrix_np(quaternion: np.ndarray) -> np.ndarray:
-    """Quaternions [..., 4] (w, x, y, z), normalised here -> rotation matrices [..., 3, 3]."""
-    q = _normalize_np(_float_np(quaternion))
-    w, x, y, z = q[..., 0], q[..., 1], q[..., 2], q[..., 3]
-    m = np.stack([
+def _quaternion_matrix_entries(w, x, y, z) -> list:
+    """The nine entries of a unit quaternion's rotation matrix, row by row (numpy or torch)."""
+    return [
         1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
         2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
         2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
-    ], axis=-1)
+    ]
+
+
+def quaternion_to_matrix_np(quaternion: np.ndarray) -> np.ndarray:
+    """Quaternions [..., 4] (w, x, y, z), normalised here -> rotation matrices [..., 3, 3]."""
+    q = _normalize_np(_float_np(quaternion))
+    m = np.stack(_quaternion_matrix_entries(*np.moveaxis(q, -1, 0)), axis=-1)
     return m.reshape(q.shape[:-1] + (3, 3))
 
 
 def quaternion_to_matrix(quaternion: torch.Tensor) -> torch.Tensor:
     """Torch version of :func:`quaternion_to_matrix_np`; differentiable."""
     q = _normalize(quaternion)
-    w, x, y, z = q.unbind(-1)
-    m = torch.stack([
-        1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
-        2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-        2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y),
-    ], dim=-1)
+    m = torch.stack(_quaternion_matrix_entries(*q.unbind(-1)), dim=-1)
     return m.reshape(q.shape[:-1] + (3, 3))
 
 
