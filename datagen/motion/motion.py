@@ -29,7 +29,7 @@ from datagen.motion.rotations import (
     quaternion_to_axis_angle_np,
 )
 
-__all__ = ["Motion", "NPZ_KEYS"]
+__all__ = ["NPZ_KEYS", "Motion"]
 
 NPZ_KEYS: tuple[str, ...] = ("poses", "trans", "mocap_framerate", "label", "label_name", "source")
 """Arrays in a motion ``.npz`` written by :meth:`Motion.save_npz`."""
@@ -150,7 +150,7 @@ class Motion:
         """
         fps = _check_fps(fps, "the new fps")
         src_count = self.frame_count
-        new_count = int(math.floor(self.duration * fps + _SNAP)) + 1
+        new_count = math.floor(self.duration * fps + _SNAP) + 1
         s = np.arange(new_count) / fps * self.fps  # position in source frames
         nearest = np.rint(s)
         s = np.clip(np.where(np.abs(s - nearest) < _SNAP, nearest, s), 0.0, src_count - 1)
@@ -227,7 +227,7 @@ class Motion:
                     "(radians), or None for the SMPL T-pose"
                 )
             _check_finite(rest[None], "rest_pose", "joints")
-        n = int(round(seconds * self.fps))
+        n = round(seconds * self.fps)
         if n == 0:
             return self, 0
         u = np.arange(n) / n

@@ -30,15 +30,24 @@ import numpy as np
 import torch
 
 __all__ = [
-    "axis_angle_to_matrix_np", "axis_angle_to_matrix",
-    "matrix_to_axis_angle_np", "matrix_to_axis_angle",
-    "axis_angle_to_quaternion_np", "axis_angle_to_quaternion",
-    "quaternion_to_axis_angle_np", "quaternion_to_axis_angle",
-    "quaternion_to_matrix_np", "quaternion_to_matrix",
-    "matrix_to_quaternion_np", "matrix_to_quaternion",
-    "matrix_to_rotation_6d_np", "matrix_to_rotation_6d",
-    "rotation_6d_to_matrix_np", "rotation_6d_to_matrix",
-    "quaternion_slerp_np", "quaternion_slerp",
+    "axis_angle_to_matrix",
+    "axis_angle_to_matrix_np",
+    "axis_angle_to_quaternion",
+    "axis_angle_to_quaternion_np",
+    "matrix_to_axis_angle",
+    "matrix_to_axis_angle_np",
+    "matrix_to_quaternion",
+    "matrix_to_quaternion_np",
+    "matrix_to_rotation_6d",
+    "matrix_to_rotation_6d_np",
+    "quaternion_slerp",
+    "quaternion_slerp_np",
+    "quaternion_to_axis_angle",
+    "quaternion_to_axis_angle_np",
+    "quaternion_to_matrix",
+    "quaternion_to_matrix_np",
+    "rotation_6d_to_matrix",
+    "rotation_6d_to_matrix_np",
 ]
 
 _SMALL_ANGLE = 1e-4

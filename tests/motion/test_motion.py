@@ -16,8 +16,8 @@ def make_motion(frames=31, fps=30.0, seed=0, **kwargs):
     rng = np.random.default_rng(seed)
     poses = rng.normal(scale=0.4, size=(frames, 24, 3))
     trans = np.cumsum(rng.normal(scale=0.01, size=(frames, 3)), axis=0) + [0.0, 0.9, 0.0]
-    args = dict(label=3, label_name="walk",
-                source={"kind": "procedural", "generator": "test", "params": {"seed": seed}})
+    args = {"label": 3, "label_name": "walk",
+                "source": {"kind": "procedural", "generator": "test", "params": {"seed": seed}}}
     args.update(kwargs)
     return Motion(poses=poses, trans=trans, fps=fps, **args)
 
@@ -90,7 +90,7 @@ def test_fps_must_be_positive(fps):
 
 
 def test_label_and_source_checked():
-    ok = dict(poses=np.zeros((2, 24, 3)), trans=np.zeros((2, 3)), fps=30)
+    ok = {"poses": np.zeros((2, 24, 3)), "trans": np.zeros((2, 3)), "fps": 30}
     with pytest.raises(InputError, match="label must be an int"):
         Motion(**ok, label="walk", label_name="walk")
     with pytest.raises(InputError, match="label_name must be a str"):
