@@ -32,14 +32,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     from datagen.body import cli as body_cli
+    from datagen.motion import cli as motion_cli
 
     body_cli.register(sub, _Formatter)
-    try:
-        from datagen.motion import cli as motion_cli
-    except ImportError:  # the motion commands arrive with the motion capability
-        motion_cli = None
-    if motion_cli is not None:
-        motion_cli.register(sub, _Formatter)
+    motion_cli.register(sub, _Formatter)
     return parser
 
 

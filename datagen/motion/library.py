@@ -91,7 +91,7 @@ _EXTRA: dict[str, dict[str, ParamSpec]] = {
     "sit_stand": {"depth": ParamSpec(0.3, 0.42, "how far the pelvis drops (m)"),
                   "hold": ParamSpec(0.1, 0.35, "share of the cycle spent seated")},
     "turn_in_place": {"angle": ParamSpec(90.0, 200.0, "turn per half cycle (deg)")},
-    "box": {"punch_rate": ParamSpec(0.9, 1.6, "punches per second")},
+    "box": {"punch_rate": ParamSpec(0.8, 1.3, "punches per second")},
     "dance_sway": {"bpm": ParamSpec(95.0, 130.0, "beats per minute"),
                    "step": ParamSpec(0.15, 0.28, "side step length (m)")},
     "dance_disco": {"bpm": ParamSpec(100.0, 130.0, "beats per minute")},
@@ -295,7 +295,7 @@ def _gait(c: _Ctx, *, stride: float, cadence: float, turn: float, duty: float, l
 
 def _walk(c: _Ctx) -> None:
     p = c.p
-    _gait(c, stride=p["stride"], cadence=p["cadence"], turn=p["turn"], duty=0.62, lift=0.07, drop=0.045 + 0.08 * (p["stride"] - 0.85),
+    _gait(c, stride=p["stride"], cadence=p["cadence"], turn=p["turn"], duty=0.62, lift=0.07, drop=0.055 + 0.08 * (p["stride"] - 0.85),
           bob=0.015, lean=3 * DEG, arm_gain=1.0, elbow=12 * DEG, heel_off=30 * DEG)
 
 
@@ -601,8 +601,8 @@ def _box(c: _Ctx) -> None:
     y = -0.06 - 0.02 * p["amplitude"] * (0.5 + 0.5 * np.cos(2 * np.pi * bounce))
     rate = p["punch_rate"] * p["tempo"]
     u = c.t * rate + p["phase"]
-    jab = pulse(u, 0.45) ** 2 * (np.floor(u + 0.5) % 2 == 0)  # squared: smooth to the 2nd derivative
-    cross = pulse(u, 0.45) ** 2 * (np.floor(u + 0.5) % 2 == 1)
+    jab = pulse(u, 0.8) ** 2 * (np.floor(u + 0.5) % 2 == 0)  # squared: smooth to the 2nd derivative
+    cross = pulse(u, 0.8) ** 2 * (np.floor(u + 0.5) % 2 == 1)
     turn = sl * (-25 * DEG + 20 * DEG * cross - 5 * DEG * jab)
     c.pelvis(np.stack([np.zeros(c.T), y, 0.03 * cross], -1), yaw=turn * 0.4)
     c.spine(flex=8 * DEG * np.ones(c.T), twist=turn * 0.6)

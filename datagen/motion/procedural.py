@@ -340,7 +340,7 @@ def solve_leg_ik(rig: Rig, side: str, hip_pos: np.ndarray, pelvis_rot: np.ndarra
     d_max = np.linalg.norm(thigh + shin)  # reach at zero flexion (the rest leg)
     v = ankle_target - hip_pos
     d = np.linalg.norm(v, axis=-1)
-    soft = 0.01  # m: the smooth approach to full reach
+    soft = 0.015  # m: the smooth approach to full reach (keeps the knee off its singularity)
     dm = d_max - 1e-3
     d_eff = dm - soft * np.logaddexp(0.0, (dm - d) / soft)
     d_eff = np.maximum(d_eff, abs(l1 - l2) + 0.05)
@@ -377,7 +377,11 @@ def assemble(rig: Rig, track: PoseTrack) -> tuple[np.ndarray, np.ndarray]:
         h, k, a = solve_leg_ik(rig, side, hip_pos, track.pelvis_rot, target, knee_fwd, track.foot_rot[side])
         local[:, J[f"{side}_hip"]] = h
         local[:, J[f"{side}_knee"]] = k
-        local[:, J[f"{side}_ankle"]] = a
+        # keep the ankle inside its range (flexion -45..60 degrees): a runner's foot at toe-off
+        # would otherwise over-point; squashed smoothly, identity over most of the range
+        ang = euler_angles(f"{side}_ankle", a)
+        ang[:, 0] = soft_clip(ang[:, 0], np.radians(-45.0), np.radians(60.0))
+        local[:, J[f"{side}_ankle"]] = euler(f"{side}_ankle", ang[:, 0], ang[:, 1], ang[:, 2])
         # with the heel up (toe-down pitch) the toes bend back to lie flat on the ground
         fwd = track.foot_rot[side][:, :, 2]
         flat = rot_y(np.arctan2(fwd[:, 0], fwd[:, 2]))
