@@ -22,11 +22,11 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from datagen.body.cache import default_body  # noqa: E402
-from datagen.motion.labels import LABELS  # noqa: E402
-from datagen.motion.library import default_rig, make_motion  # noqa: E402
-from datagen.motion.quality import BodyProbe, measure_motion  # noqa: E402
-from datagen.motion.rotations import axis_angle_to_matrix_np, matrix_to_rotation_6d_np  # noqa: E402
+from datagen.body.cache import default_body
+from datagen.motion.labels import LABELS
+from datagen.motion.library import default_rig, make_motion
+from datagen.motion.quality import BodyProbe, measure_motion
+from datagen.motion.rotations import axis_angle_to_matrix_np, matrix_to_rotation_6d_np
 
 
 def window_features(motion, window: int = 15, hop: int = 5) -> np.ndarray:
@@ -74,7 +74,7 @@ def main() -> None:
         qs = [measure_motion(m, probe, stride=args.stride) for m in motions]
         all_motions[label] = motions
         feats[label] = [window_features(m) for m in motions]
-        mean = lambda k: float(np.mean([getattr(q, k) for q in qs]))  # noqa: E731
+        mean = lambda k, qs=qs: float(np.mean([getattr(q, k) for q in qs]))
         dropped = sum(q.penetration_share > 0 for q in qs)
         print(f"{label:14s} {mean('penetration_share'):9.2%} {dropped:4d}/{len(qs):<2d} {mean('foot_skate') * 100:10.2f} "
               f"{mean('contact_share'):7.2f} {max(q.ground_penetration for q in qs) * 1000:7.1f} "

@@ -133,7 +133,7 @@ def _cmd_make(args) -> int:
 def _cmd_import(args) -> int:
     path = Path(args.file)
     suffix = path.suffix.lower()
-    common = dict(label_name=args.label_name, fps=args.fps, allow_unlabelled=args.allow_unlabelled)
+    common = {"label_name": args.label_name, "fps": args.fps, "allow_unlabelled": args.allow_unlabelled}
     if suffix == ".bvh":
         from datagen.motion.bvh import read_bvh
 

@@ -90,7 +90,7 @@ _EXTRA: dict[str, dict[str, ParamSpec]] = {
     "side_bend": {"bend": ParamSpec(18.0, 35.0, "peak sideways bend (deg)")},
     "sit_stand": {"depth": ParamSpec(0.3, 0.42, "how far the pelvis drops (m)"),
                   "hold": ParamSpec(0.1, 0.35, "share of the cycle spent seated")},
-    "turn_in_place": {"angle": ParamSpec(90.0, 200.0, "turn per half cycle (deg)")},
+    "turn_in_place": {"angle": ParamSpec(90.0, 180.0, "turn per half cycle (deg)")},
     "box": {"punch_rate": ParamSpec(0.8, 1.3, "punches per second")},
     "dance_sway": {"bpm": ParamSpec(95.0, 130.0, "beats per minute"),
                    "step": ParamSpec(0.15, 0.28, "side step length (m)")},
@@ -308,7 +308,7 @@ def _run(c: _Ctx) -> None:
 
 def _turn_in_place(c: _Ctx) -> None:
     p = c.p
-    f = 0.9 * p["tempo"]
+    f = 1.4 * p["tempo"]  # quick steps, so the planted foot never lags the turn by much
     angle = p["angle"] * DEG * p["amplitude"] * (1 if p["asymmetry"] >= 0 else -1)
     # turn one way over half a 4 s cycle, then back
     u = c.t / (4.0 / p["tempo"]) + p["phase"]
@@ -463,8 +463,10 @@ def _kick(c: _Ctx) -> None:
     # the foot follows the virtual shin and points with the snap; the ankle is raised where a
     # pointed foot would otherwise put its ball below the floor
     shin_pitch = knee - flex - 8 * DEG * kick  # the virtual shin's pitch (world, toe-down > 0)
-    pitch = np.clip(w[:, 0] * (shin_pitch + 25 * DEG * snap), 0.0, None)
-    target[:, 1] = np.maximum(target[:, 1], planted[:, 1] + heel_roll_offset(c.rig, pitch)[0])
+    pitch = w[:, 0] * (shin_pitch + 25 * DEG * snap)
+    # a toe-down foot pivots on its ball, a toe-up one on its heel (about 7 cm behind the ankle)
+    lift = np.where(pitch > 0, heel_roll_offset(c.rig, np.clip(pitch, 0, None))[0], 0.07 * np.sin(np.clip(-pitch, 0, None)))
+    target[:, 1] = np.maximum(target[:, 1], planted[:, 1] + lift)
     c.track.foot_rot[side] = foot_orientation(np.full(c.T, sgn * 6 * DEG), pitch)
     c.spine(flex=-6 * DEG * kick)
     c.head(flex=10 * DEG * kick)

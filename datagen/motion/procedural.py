@@ -351,7 +351,10 @@ def solve_leg_ik(rig: Rig, side: str, hip_pos: np.ndarray, pelvis_rot: np.ndarra
     R1 = _rotation_between(reach, v)
     u = v / np.linalg.norm(v, axis=-1, keepdims=True)
     fwd1 = R1[:, :, 2]  # the thigh's forward axis after R1
-    f_ref = knee_forward - np.sum(knee_forward * u, -1, keepdims=True) * u
+    # a leg raised toward knee_forward (a kick) has its knee pointing up, not along the leg
+    ahead = np.clip(np.sum(knee_forward * u, -1, keepdims=True), 0.0, None)
+    ref = knee_forward + 2.0 * ahead * np.array([0.0, 1.0, 0.0])
+    f_ref = ref - np.sum(ref * u, -1, keepdims=True) * u
     f_cur = fwd1 - np.sum(fwd1 * u, -1, keepdims=True) * u
     swivel = np.arctan2(np.sum(np.cross(f_cur, f_ref) * u, -1), np.sum(f_cur * f_ref, -1))
     R_hip_world = Rotation.from_rotvec(u * swivel[:, None]).as_matrix() @ R1

@@ -5,7 +5,8 @@ Per motion, on a given body:
 - **limb-torso interpenetration**: share of checked frames in which some limb vertex (forearm,
   hand, lower upper arm, shin, foot) lies inside the torso. A limb vertex ``p`` with normal ``n``
   counts when ``p + eps * n`` (``eps`` = 4 mm, so skin in mere contact does not count) is inside
-  the closed posed body (winding number, warp) *and* on the inner side of the nearest torso face.
+  the closed posed body (winding number, warp) *and* on the inner side of the nearest torso face
+  within 10 cm (so a fold of the skin behind a bent knee, inside the limb itself, does not count).
   Paper 001 discards such sequences; :func:`filter_motions` does the same and says how many.
 - **foot skate**: mean horizontal speed (m/s) of the toe and ankle joints over frames in which
   that joint is in contact (within 1.5 cm of its rest height above the ground and moving
@@ -167,7 +168,7 @@ def _kernel():
         p = points[tid]
         q = wp.mesh_query_point_sign_winding_number(body, p, 1.0, 2.0, 0.5)
         if q.result and q.sign < 0.0:
-            t = wp.mesh_query_point_sign_normal(torso, p, 0.3)
+            t = wp.mesh_query_point_sign_normal(torso, p, 0.1)
             if t.result and t.sign < 0.0:
                 out[tid] = 1
     return inside_torso

@@ -7,7 +7,7 @@ import pytest
 
 from datagen.errors import InputError
 from datagen.motion.labels import LABELS, label_index, label_vocabulary
-from datagen.motion.library import LABEL_PARAMS, _GENERATORS, make_motion, style_params
+from datagen.motion.library import _GENERATORS, LABEL_PARAMS, make_motion, style_params
 from datagen.motion.procedural import J, Rig, euler, forward_kinematics
 from datagen.motion.rotations import axis_angle_to_matrix_np
 
