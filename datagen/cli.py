@@ -32,10 +32,12 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     from datagen.body import cli as body_cli
+    from datagen.garment import cli as garment_cli
     from datagen.motion import cli as motion_cli
 
     body_cli.register(sub, _Formatter)
     motion_cli.register(sub, _Formatter)
+    garment_cli.register(sub, _Formatter)
     return parser
 
 

@@ -1,0 +1,141 @@
+"""Checks that a garment can be simulated: topology, mesh quality, self-intersections, placement.
+
+Each check returns plain numbers; :func:`check_garment` gathers them with a pass/fail verdict.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["check_garment", "placement", "quality", "self_intersections", "topology"]
+
+
+def topology(vertices: np.ndarray, faces: np.ndarray) -> dict:
+    """Edge- and vertex-manifoldness, components, orientation, boundary loop count (trimesh)."""
+    import trimesh
+
+    from datagen.garment.mesh import boundary_loops
+
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    edges = np.sort(mesh.edges, axis=1)
+    _, counts = np.unique(edges, axis=0, return_counts=True)
+    non_manifold_edges = int((counts > 2).sum())
+    loops = boundary_loops(faces)
+    boundary_vertices = sum(len(lp) for lp in loops)
+    unique_boundary = len(np.unique(np.concatenate(loops))) if loops else 0
+    return {"non_manifold_edges": non_manifold_edges,
+            "non_manifold_vertices": int(boundary_vertices - unique_boundary),  # a vertex on two boundary runs
+            "components": len(mesh.split(only_watertight=False)),
+            "winding_consistent": bool(mesh.is_winding_consistent),
+            "boundary_loops": len(loops)}
+
+
+def quality(vertices: np.ndarray, faces: np.ndarray) -> dict:
+    """Minimum triangle angle (degrees) and edge-length spread (std / mean)."""
+    v = vertices[faces]
+    angles = []
+    for k in range(3):
+        a = v[:, (k + 1) % 3] - v[:, k]
+        b = v[:, (k + 2) % 3] - v[:, k]
+        cos = np.sum(a * b, 1) / (np.linalg.norm(a, axis=1) * np.linalg.norm(b, axis=1))
+        angles.append(np.degrees(np.arccos(np.clip(cos, -1, 1))))
+    e = np.linalg.norm(np.concatenate([v[:, 1] - v[:, 0], v[:, 2] - v[:, 1], v[:, 0] - v[:, 2]]), axis=1)
+    ang = np.concatenate(angles)
+    return {"min_angle_deg": float(ang.min()), "angle_p1_deg": float(np.percentile(ang, 1)),
+            "edge_mean": float(e.mean()), "edge_spread": float(e.std() / e.mean())}
+
+
+def self_intersections(vertices: np.ndarray, faces: np.ndarray) -> int:
+    """Number of faces that intersect another face of the same mesh (pymeshlab)."""
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices), np.ascontiguousarray(faces, dtype=np.int32)))
+    ms.compute_selection_by_self_intersections_per_face()
+    return int(ms.current_mesh().selected_face_number())
+
+
+_KERNELS = {}
+
+
+def _kernels():
+    if not _KERNELS:
+        import warp as wp
+
+        @wp.kernel
+        def inside(mesh: wp.uint64, pts: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
+            tid = wp.tid()
+            q = wp.mesh_query_point_sign_winding_number(mesh, pts[tid], 10.0, 2.0, 0.5)
+            c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
+            out[tid] = wp.length(pts[tid] - c) * q.sign
+
+        @wp.kernel
+        def crossing(mesh: wp.uint64, a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.int32)):
+            tid = wp.tid()
+            d = b[tid] - a[tid]
+            L = wp.length(d)
+            q = wp.mesh_query_ray(mesh, a[tid], d / L, L)
+            if q.result:
+                out[tid] = 1
+
+        _KERNELS["inside"], _KERNELS["crossing"] = inside, crossing
+    return _KERNELS
+
+
+def _wmesh(v, f):
+    import warp as wp
+
+    return wp.Mesh(points=wp.array(np.asarray(v, np.float32), dtype=wp.vec3),
+                   indices=wp.array(np.asarray(f, np.int32).ravel(), dtype=wp.int32))
+
+
+def _edges(f):
+    return np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0)
+
+
+def placement(vertices: np.ndarray, faces: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray) -> dict:
+    """Garment vertices inside the body, garment/body triangles crossing, and the minimum clearance (m).
+
+    Two triangle meshes intersect exactly where an edge of one passes through a triangle of the
+    other, so crossing is tested both ways with warp ray queries along every edge.
+    """
+    import warp as wp
+
+    k = _kernels()
+    body = _wmesh(body_vertices, body_faces)
+    cloth = _wmesh(vertices, faces)
+    sd = wp.zeros(len(vertices), dtype=float)
+    wp.launch(k["inside"], dim=len(vertices), inputs=[body.id, wp.array(np.asarray(vertices, np.float32), dtype=wp.vec3), sd])
+    sd = sd.numpy()
+    crossings = 0
+    for (va, fa), mesh in (((vertices, faces), body), ((body_vertices, body_faces), cloth)):
+        e = _edges(np.asarray(fa))
+        a = wp.array(np.asarray(va, np.float32)[e[:, 0]], dtype=wp.vec3)
+        b = wp.array(np.asarray(va, np.float32)[e[:, 1]], dtype=wp.vec3)
+        out = wp.zeros(len(e), dtype=wp.int32)
+        wp.launch(k["crossing"], dim=len(e), inputs=[mesh.id, a, b, out])
+        crossings += int(out.numpy().sum())
+    return {"vertices_inside": int((sd < 0).sum()), "edge_crossings": crossings, "min_clearance": float(sd.min())}
+
+
+def check_garment(garment, body_vertices: np.ndarray, body_faces: np.ndarray) -> dict:
+    """Every check on ``garment`` (a :class:`~datagen.garment.mesh.GarmentMesh`) and a verdict."""
+    v, f = garment.vertices, garment.faces
+    out = {**topology(v, f), **quality(v, f), "self_intersecting_faces": self_intersections(v, f),
+           **placement(v, f, body_vertices, body_faces)}
+    failures = []
+    if out["non_manifold_edges"] or out["non_manifold_vertices"]:
+        failures.append("non-manifold")
+    if out["components"] != 1:
+        failures.append(f"{out['components']} components")
+    if not out["winding_consistent"]:
+        failures.append("inconsistent winding")
+    if out["boundary_loops"] != garment.metadata.get("expected_boundary_loops", out["boundary_loops"]):
+        failures.append(f"{out['boundary_loops']} boundary loops, expected {garment.metadata['expected_boundary_loops']}")
+    if out["self_intersecting_faces"]:
+        failures.append(f"{out['self_intersecting_faces']} self-intersecting faces")
+    if out["vertices_inside"] or out["edge_crossings"]:
+        failures.append(f"penetrates the body ({out['vertices_inside']} vertices inside, {out['edge_crossings']} crossings)")
+    out["failures"] = failures
+    out["ok"] = not failures
+    return out

@@ -1,0 +1,175 @@
+"""Garment surfaces as level sets around the body, cut open and remeshed isotropically.
+
+A garment's inside is ``{x : F(x) < 0}`` with ``F = smin(d_body(x) - ease(x), F_extra(x))``: the
+body's signed distance (negative inside, from a warp mesh query with winding-number sign) minus a
+clearance that varies over the body, smoothly united with shapes that leave the body (the cone of
+a skirt). Its surface is extracted by marching cubes (scikit-image) on a grid covering only the
+garment's extent, cut open by scalar fields (keep where ``c(x) > 0``; the cut runs exactly along
+``c = 0``), reduced to its largest component, and remeshed to a target edge length by pymeshlab's
+isotropic explicit remeshing, which reprojects onto the extracted surface and keeps the open
+boundaries.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+__all__ = ["body_sdf", "cut_mesh", "extract_surface", "largest_component", "remesh", "smin"]
+
+
+def _warp():
+    import warp as wp
+
+    return wp
+
+
+_KERNEL = None
+
+
+def _sdf_kernel():
+    global _KERNEL
+    if _KERNEL is None:
+        wp = _warp()
+
+        @wp.kernel
+        def sdf(mesh: wp.uint64, points: wp.array(dtype=wp.vec3), max_dist: float, out: wp.array(dtype=float)):
+            tid = wp.tid()
+            p = points[tid]
+            q = wp.mesh_query_point_sign_winding_number(mesh, p, max_dist, 2.0, 0.5)
+            if q.result:
+                c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
+                out[tid] = wp.length(p - c) * q.sign
+            else:
+                out[tid] = max_dist
+
+        _KERNEL = sdf
+    return _KERNEL
+
+
+def body_sdf(vertices: np.ndarray, faces: np.ndarray, points: np.ndarray, max_dist: float = 0.5) -> np.ndarray:
+    """Signed distance [N] (m; negative inside) of ``points`` [N, 3] to the closed mesh
+    (``vertices`` [V, 3], ``faces`` [F, 3]); points farther than ``max_dist`` get ``max_dist``."""
+    wp = _warp()
+    device = "cpu"
+    mesh = wp.Mesh(points=wp.array(np.ascontiguousarray(vertices, dtype=np.float32), dtype=wp.vec3, device=device),
+                   indices=wp.array(np.ascontiguousarray(faces, dtype=np.int32).ravel(), dtype=wp.int32, device=device))
+    pts = wp.array(np.ascontiguousarray(points, dtype=np.float32), dtype=wp.vec3, device=device)
+    out = wp.zeros(len(points), dtype=float, device=device)
+    wp.launch(_sdf_kernel(), dim=len(points), inputs=[mesh.id, pts, float(max_dist), out], device=device)
+    return out.numpy().astype(np.float64)
+
+
+def smin(a: np.ndarray, b: np.ndarray, k: float) -> np.ndarray:
+    """Smooth minimum (polynomial, blend width ``k`` m): the union of two implicit shapes."""
+    h = np.clip(0.5 + 0.5 * (b - a) / k, 0.0, 1.0)
+    return b * (1 - h) + a * h - k * h * (1 - h)
+
+
+def extract_surface(field, lo: np.ndarray, hi: np.ndarray, spacing: float) -> tuple[np.ndarray, np.ndarray]:
+    """Marching cubes of ``field(points [N, 3]) -> [N]`` at level 0 over the box [lo, hi] (m).
+
+    Returns vertices [V, 3] (m) and faces [F, 3] with normals pointing toward positive ``field``
+    (outward for an inside-negative field).
+    """
+    from skimage.measure import marching_cubes
+
+    axes = [np.arange(lo[i], hi[i] + spacing, spacing) for i in range(3)]
+    grid = np.stack(np.meshgrid(*axes, indexing="ij"), axis=-1)
+    values = field(grid.reshape(-1, 3)).reshape(grid.shape[:3])
+    # the box border counts as outside, so the surface closes where it meets the box (the cuts
+    # that open the garment lie inside the box, so those caps are cut away)
+    for axis in range(3):
+        index = [slice(None)] * 3
+        for end in (0, -1):
+            index[axis] = end
+            values[tuple(index)] = spacing
+    verts, faces, _, _ = marching_cubes(values, level=0.0, spacing=(spacing, spacing, spacing))
+    verts += lo
+    # skimage orients faces toward decreasing values for this call; flip to face the positive side
+    return verts, faces[:, ::-1].astype(np.int64)
+
+
+def cut_mesh(vertices: np.ndarray, faces: np.ndarray, keep: np.ndarray, snap: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Cut a triangle mesh along the zero level of a per-vertex scalar ``keep`` [V]; keep ``> 0``.
+
+    Every edge whose ends have opposite signs gets one new vertex at the linear zero crossing
+    (shared by both triangles of the edge), so the cut is watertight along its curve. Triangles
+    with one kept corner become one triangle, with two kept corners two. A vertex within
+    ``snap`` of the level counts as on it (the cut passes through it), which avoids slivers.
+    """
+    s = np.asarray(keep, dtype=np.float64).copy()
+    on = np.abs(s) <= max(snap, 1e-12)
+    s[on] = 0.0
+    pos = s >= 0.0  # on-cut vertices are kept
+    npos = pos[faces].sum(1)
+    keep_all = faces[npos == 3]
+    partial = faces[(npos == 1) | (npos == 2)]
+    new_verts = [vertices]
+    edge_vertex: dict[tuple[int, int], int] = {}
+    count = len(vertices)
+
+    def crossing(a: int, b: int) -> int:
+        nonlocal count
+        if s[a] == 0.0:
+            return a
+        if s[b] == 0.0:
+            return b
+        key = (a, b) if a < b else (b, a)
+        idx = edge_vertex.get(key)
+        if idx is None:
+            t = s[a] / (s[a] - s[b])
+            new_verts.append((vertices[a] + t * (vertices[b] - vertices[a]))[None])
+            idx = edge_vertex[key] = count
+            count += 1
+        return idx
+
+    out = [keep_all]
+    tris = []
+    for f in partial:
+        p = pos[f]
+        # rotate so the odd corner (the lone kept or the lone dropped one) comes first
+        k = int(np.flatnonzero(p == (p.sum() == 1))[0])
+        a, b, c = f[k], f[(k + 1) % 3], f[(k + 2) % 3]
+        ab, ac = crossing(a, b), crossing(a, c)
+        if p.sum() == 1:  # only a kept
+            tris.append((a, ab, ac))
+        else:  # a dropped, b and c kept
+            tris.append((ab, b, c))
+            tris.append((ab, c, ac))
+    if tris:
+        t = np.asarray(tris, dtype=np.int64)
+        t = t[(t[:, 0] != t[:, 1]) & (t[:, 1] != t[:, 2]) & (t[:, 2] != t[:, 0])]  # drop collapsed ones
+        out.append(t)
+    faces_out = np.concatenate(out)
+    # a triangle whose corners are all on the cut lies in the cut itself: drop it
+    faces_out = faces_out[~on[np.minimum(faces_out, len(on) - 1)].all(1) | (faces_out >= len(on)).any(1)]
+    verts_out = np.concatenate(new_verts)
+    used = np.unique(faces_out)
+    remap = np.full(len(verts_out), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return verts_out[used], remap[faces_out]
+
+
+def largest_component(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The connected component (by shared edges) with the most faces."""
+    import trimesh
+
+    mesh = trimesh.Trimesh(vertices, faces, process=False)
+    parts = mesh.split(only_watertight=False)
+    if len(parts) <= 1:
+        return vertices, faces
+    best = max(parts, key=lambda m: len(m.faces))
+    return np.asarray(best.vertices), np.asarray(best.faces)
+
+
+def remesh(vertices: np.ndarray, faces: np.ndarray, edge_length: float, iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
+    """Isotropic explicit remeshing (pymeshlab) to ``edge_length`` (m), boundaries kept."""
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32)))
+    ms.meshing_isotropic_explicit_remeshing(iterations=iterations, targetlen=pymeshlab.PureValue(edge_length),
+                                            featuredeg=180.0, maxsurfdist=pymeshlab.PureValue(edge_length * 0.1))
+    ms.meshing_remove_unreferenced_vertices()
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)

@@ -1,0 +1,88 @@
+"""Cloth material presets in SI units.
+
+Membrane stiffness is given per unit width (N/m, i.e. Young's modulus times thickness), as cloth
+measurements report it. Values are representative of published measurements rather than one
+sample:
+
+- Stretch and bending stiffness: the orders of magnitude measured on woven and knit fabrics with
+  the Kawabata evaluation system (KES) and by Wang, O'Brien and Ramamoorthi, "Data-driven elastic
+  models for cloth" (SIGGRAPH 2011), and Miguel et al., "Data-driven estimation of cloth simulation
+  models" (Eurographics 2012): wovens (denim, cotton shirting) are one to two orders of magnitude
+  stiffer in stretch than knits (jersey); bending stiffness spans about 1e-6 to 1e-4 N·m.
+- Areal density: typical fabric weights (silk 60-80 g/m², shirting cotton 110-150 g/m², jersey
+  150-200 g/m², denim 300-450 g/m²).
+- Poisson's ratio: about 0.2-0.4 for wovens, higher for knits (Penava et al., "Determination of
+  the elastic constants of plain woven fabrics by a tensile test in various directions", Fibres &
+  Textiles in Eastern Europe 2014).
+- Friction: cloth on skin about 0.3-0.6 (Gerhardt et al., "Friction of textiles against skin").
+
+These are approximate presets for simulation, not measurements of particular fabrics; a user with
+measured values passes their own :class:`Material`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+from datagen.errors import InputError
+
+__all__ = ["MATERIALS", "Material", "material"]
+
+
+@dataclass(frozen=True, kw_only=True)
+class Material:
+    """A cloth material (SI units).
+
+    Attributes:
+        name: preset name.
+        density: areal density [kg/m²].
+        stretch_warp: membrane stretch stiffness along the warp (v) direction [N/m].
+        stretch_weft: membrane stretch stiffness along the weft (u) direction [N/m].
+        shear: in-plane shear stiffness [N/m].
+        poisson: Poisson's ratio [-].
+        bending: bending stiffness [N·m].
+        friction: Coulomb friction coefficient against skin [-].
+        thickness: cloth thickness used as collision distance [m].
+        damping: stiffness-proportional damping [s].
+    """
+
+    name: str
+    density: float
+    stretch_warp: float
+    stretch_weft: float
+    shear: float
+    poisson: float
+    bending: float
+    friction: float
+    thickness: float
+    damping: float = 0.01
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+MATERIALS: dict[str, Material] = {
+    "cotton": Material(name="cotton", density=0.13, stretch_warp=1800.0, stretch_weft=1200.0, shear=60.0,
+                       poisson=0.3, bending=1.2e-5, friction=0.45, thickness=0.0015),
+    "denim": Material(name="denim", density=0.40, stretch_warp=6000.0, stretch_weft=3500.0, shear=200.0,
+                      poisson=0.25, bending=8.0e-5, friction=0.5, thickness=0.0025),
+    "jersey": Material(name="jersey", density=0.18, stretch_warp=120.0, stretch_weft=60.0, shear=15.0,
+                       poisson=0.45, bending=3.0e-6, friction=0.4, thickness=0.0015),
+    "silk": Material(name="silk", density=0.07, stretch_warp=900.0, stretch_weft=700.0, shear=20.0,
+                     poisson=0.3, bending=1.5e-6, friction=0.3, thickness=0.001),
+    "polyester": Material(name="polyester", density=0.15, stretch_warp=2500.0, stretch_weft=2000.0, shear=80.0,
+                          poisson=0.3, bending=1.0e-5, friction=0.35, thickness=0.0015),
+    "wool": Material(name="wool", density=0.30, stretch_warp=1500.0, stretch_weft=1000.0, shear=70.0,
+                     poisson=0.3, bending=4.0e-5, friction=0.5, thickness=0.003),
+}
+"""The presets, by name."""
+
+
+def material(name: str | Material) -> Material:
+    """A preset by name (or a :class:`Material` passed through); unknown names list the presets."""
+    if isinstance(name, Material):
+        return name
+    try:
+        return MATERIALS[name]
+    except KeyError:
+        raise InputError(f"unknown material {name!r}; presets: {', '.join(MATERIALS)}") from None

@@ -1,0 +1,313 @@
+"""Procedural garment types with seeded style parameters, built on a body in its rest pose.
+
+Every type is a level set around the body (:mod:`datagen.garment.levelset`): a clearance
+(``ease``) that varies from chest to waist to hips to cuffs and hems, a cone for the parts that
+leave the body (skirts, dresses, coats), and cuts that open the neck, armholes or sleeve ends,
+waist, hems and, for jackets and coats, the front. All lengths are in metres and measured from
+the body's own joints, so one parameter set fits every body shape.
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from datagen.errors import InputError
+from datagen.garment import levelset
+from datagen.garment.materials import Material, material
+from datagen.garment.mesh import GarmentMesh
+
+__all__ = ["GARMENT_TYPES", "MAX_VERTICES", "MIN_CLEARANCE", "ParamSpec", "garment_params", "make_garment"]
+
+log = logging.getLogger(__name__)
+
+MIN_CLEARANCE = 0.008
+"""Smallest distance (m) between the constructed garment surface and the body."""
+
+MAX_VERTICES = 200_000
+"""Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
+
+BUILDER_VERSION = 1
+
+
+@dataclass(frozen=True)
+class ParamSpec:
+    low: float
+    high: float
+    doc: str
+
+
+_TOP = {
+    "ease_chest": ParamSpec(0.015, 0.05, "clearance at the chest (m)"),
+    "ease_waist": ParamSpec(0.015, 0.06, "clearance at the waist (m)"),
+    "ease_hip": ParamSpec(0.015, 0.05, "clearance at the hips (m)"),
+    "hem": ParamSpec(0.0, 0.12, "hem below the hip joints (m)"),
+    "neck_drop": ParamSpec(0.0, 0.03, "neckline lowered all round (m)"),
+    "neck_width": ParamSpec(0.0, 0.03, "neck opening wider than the neck and its clearance (m)"),
+    "neck_depth": ParamSpec(0.0, 0.09, "extra depth of the neckline at the front (m)"),
+}
+_SLEEVE = {
+    "sleeve_length": ParamSpec(0.1, 0.25, "sleeve from the shoulder joint (m)"),
+    "cuff_ease": ParamSpec(0.015, 0.045, "clearance at the cuff (m)"),
+}
+_SKIRT = {
+    "flare": ParamSpec(0.0, 0.35, "widening of the skirt per metre below the hips"),
+}
+
+GARMENT_TYPES: dict[str, dict] = {
+    "tshirt": {"params": {**_TOP, **_SLEEVE}, "material": "jersey", "loops": 4},
+    "long_sleeve_shirt": {"params": {**_TOP, **_SLEEVE,
+                                     "sleeve_length": ParamSpec(0.38, 0.47, "sleeve from the shoulder joint (m)")},
+                          "material": "cotton", "loops": 4},
+    "tank_top": {"params": {**_TOP, "armhole_drop": ParamSpec(0.02, 0.07, "armhole below the armpit line (m)")},
+                 "material": "jersey", "loops": 4},
+    "jacket": {"params": {**_TOP, **_SLEEVE,
+                          "ease_chest": ParamSpec(0.035, 0.07, "clearance at the chest (m)"),
+                          "ease_waist": ParamSpec(0.04, 0.08, "clearance at the waist (m)"),
+                          "ease_hip": ParamSpec(0.035, 0.07, "clearance at the hips (m)"),
+                          "sleeve_length": ParamSpec(0.4, 0.47, "sleeve from the shoulder joint (m)"),
+                          "opening": ParamSpec(0.02, 0.08, "width of the open front (m)")},
+               "material": "denim", "loops": 3},
+    "coat": {"params": {**_TOP, **_SLEEVE, **_SKIRT,
+                        "ease_chest": ParamSpec(0.04, 0.07, "clearance at the chest (m)"),
+                        "ease_waist": ParamSpec(0.045, 0.08, "clearance at the waist (m)"),
+                        "ease_hip": ParamSpec(0.04, 0.07, "clearance at the hips (m)"),
+                        "sleeve_length": ParamSpec(0.28, 0.36, "3/4 sleeve from the shoulder joint (m)"),
+                        "hem": ParamSpec(0.35, 0.5, "hem below the hip joints (m), about the knee"),
+                        "flare": ParamSpec(0.05, 0.2, "widening per metre below the hips"),
+                        "opening": ParamSpec(0.02, 0.08, "width of the open front (m)")},
+             "material": "wool", "loops": 3},
+    "dress": {"params": {**_TOP, **_SKIRT,
+                         "armhole_drop": ParamSpec(0.02, 0.06, "armhole below the armpit line (m)"),
+                         "hem": ParamSpec(0.25, 0.5, "hem below the hip joints (m)")},
+              "material": "silk", "loops": 4},
+    "skirt": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
+                         "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
+                         "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                         "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"), **_SKIRT},
+              "material": "cotton", "loops": 2},
+    "pants": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
+                         "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
+                         "leg_ease": ParamSpec(0.015, 0.04, "clearance around the thigh (m)"),
+                         "hem_ease": ParamSpec(0.02, 0.06, "clearance at the hem (m)"),
+                         "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                         "hem": ParamSpec(0.02, 0.1, "hem above the ankle joints (m)")},
+              "material": "denim", "loops": 3},
+    "shorts": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
+                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
+                          "leg_ease": ParamSpec(0.02, 0.05, "clearance around the thigh (m)"),
+                          "hem_ease": ParamSpec(0.025, 0.06, "clearance at the hem (m)"),
+                          "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                          "hem": ParamSpec(0.25, 0.36, "hem below the hip joints (m)")},
+               "material": "cotton", "loops": 3},
+}
+"""Every garment type: its style parameters, default material and number of boundary loops."""
+
+
+def garment_params(kind: str, seed: int, overrides: dict | None = None) -> dict[str, float]:
+    """Style parameters of ``kind`` drawn by ``seed``, with ``overrides`` applied (range-checked)."""
+    if kind not in GARMENT_TYPES:
+        raise InputError(f"unknown garment type {kind!r}; types: {', '.join(GARMENT_TYPES)}")
+    specs = GARMENT_TYPES[kind]["params"]
+    rng = np.random.default_rng([int(seed), list(GARMENT_TYPES).index(kind), 104729])
+    params = {name: float(rng.uniform(s.low, s.high)) for name, s in specs.items()}
+    for name, value in (overrides or {}).items():
+        if name not in specs:
+            raise InputError(f"{kind!r} has no style parameter {name!r}; its parameters: {', '.join(specs)}")
+        s = specs[name]
+        if not (s.low <= float(value) <= s.high):
+            raise InputError(f"style parameter {name!r} of {kind!r} is {float(value):g}; allowed range is "
+                             f"[{s.low:g}, {s.high:g}] ({s.doc})")
+        params[name] = float(value)
+    return params
+
+
+@dataclass
+class _Body:
+    verts: np.ndarray
+    faces: np.ndarray
+    joints: np.ndarray
+
+    def j(self, name: str) -> np.ndarray:
+        from datagen.body.skeleton import SMPL_JOINT_NAMES
+
+        return self.joints[SMPL_JOINT_NAMES.index(name)]
+
+    def half_extent(self, y: float, band: float = 0.02) -> tuple[float, float, float]:
+        """Half width (x), half depth (z) and centre z of the torso cross-section near height y."""
+        v = self.verts
+        sel = (np.abs(v[:, 1] - y) < band) & (np.abs(v[:, 0]) < self.j("left_shoulder")[0] + 0.05)
+        pts = v[sel]
+        return float(np.abs(pts[:, 0]).max()), float(0.5 * np.ptp(pts[:, 2])), float(0.5 * (pts[:, 2].max() + pts[:, 2].min()))
+
+
+def _interp(y, ys, vals):
+    order = np.argsort(ys)
+    return np.interp(y, np.asarray(ys)[order], np.asarray(vals)[order])
+
+
+def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: dict | None = None,
+                 target_edge_length: float = 0.02, material_name: str | Material | None = None,
+                 grid_spacing: float | None = None) -> GarmentMesh:
+    """Build a garment of type ``kind`` on ``body_model`` (shape ``betas``) in its rest pose.
+
+    Args:
+        kind: a type from :data:`GARMENT_TYPES` (``drape garment list``).
+        body_model: a :class:`~datagen.body.model.BodyModel`.
+        betas: body shape [shape_dim] (default zeros).
+        seed: draws the style parameters.
+        params: style parameters to fix (each within its range).
+        target_edge_length: remeshing target (m); the default gives 2,000-8,000 vertices.
+        material_name: a preset name or a :class:`Material`; default the type's.
+        grid_spacing: marching-cubes grid step (m); default ``min(0.01, edge / 2)``.
+    """
+    t0 = time.perf_counter()
+    p = garment_params(kind, seed, params)
+    spec = GARMENT_TYPES[kind]
+    mat = material(material_name or spec["material"])
+    if not (np.isfinite(target_edge_length) and target_edge_length > 0):
+        raise InputError(f"target edge length must be a positive number of metres, got {target_edge_length!r}")
+    betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
+    verts = np.asarray(body_model.shaped(betas))[0]
+    body = _Body(verts=verts, faces=np.asarray(body_model.faces), joints=np.asarray(body_model.rest_joints(betas))[0])
+    area_guess = {"tshirt": 1.1, "long_sleeve_shirt": 1.3, "tank_top": 0.8, "jacket": 1.6, "coat": 2.4,
+                  "dress": 1.8, "skirt": 0.8, "pants": 1.5, "shorts": 0.8}[kind]
+    est_vertices = int(area_guess / (np.sqrt(3) / 4 * target_edge_length**2) / 2)
+    if est_vertices > MAX_VERTICES:
+        smallest = np.sqrt(area_guess / (2 * MAX_VERTICES * np.sqrt(3) / 4))
+        raise InputError(f"edge length {target_edge_length:g} m would give a {kind} of about {est_vertices:,} vertices "
+                         f"(~{est_vertices * 2 * 3 * 8 * 40 / 1e9:.1f} GB to simulate); the smallest allowed is "
+                         f"{smallest:.4f} m ({MAX_VERTICES:,} vertices)")
+    h = grid_spacing or min(0.01, target_edge_length / 2)
+    field, keep, lo, hi, regions = _design(kind, p, body)
+    rough_v, rough_f = levelset.extract_surface(field, lo, hi, h)
+    rough_v, rough_f = levelset.cut_mesh(rough_v, rough_f, keep(rough_v), snap=0.3 * h)
+    rough_v, rough_f = levelset.largest_component(rough_v, rough_f)
+    v, f = levelset.remesh(rough_v, rough_f, target_edge_length)
+    v, f = levelset.largest_component(v, f)
+    region_names, vertex_region, uv = regions(v)
+    seconds = time.perf_counter() - t0
+    meta = {"type": kind, "params": p, "seed": int(seed), "betas": betas.tolist(), "target_edge_length": target_edge_length,
+            "expected_boundary_loops": spec["loops"], "builder_version": BUILDER_VERSION, "build_seconds": seconds}
+    return GarmentMesh.create(v, f, uv=uv, vertex_region=vertex_region, region_names=region_names, material=mat,
+                              metadata=meta)
+
+
+def _design(kind: str, p: dict, body: _Body):
+    """The implicit field, the keep (cut) field, the grid box and the region labeller of a garment."""
+    sh = body.j("left_shoulder")
+    neck = body.j("neck")
+    chest_y = body.j("spine3")[1]
+    waist_y = body.j("spine1")[1] + 0.02
+    hip_y = body.j("left_hip")[1]
+    knee_y = body.j("left_knee")[1]
+    ankle_y = body.j("left_ankle")[1]
+    top = kind in ("tshirt", "long_sleeve_shirt", "tank_top", "jacket", "coat", "dress")
+    lower = kind in ("skirt", "pants", "shorts")
+    sleeve = "sleeve_length" in p
+    cone = "flare" in p
+    hw, hd, hzc = body.half_extent(hip_y - 0.03)
+    nw, nd, _ = body.half_extent(neck[1], band=0.01)
+    if top:
+        grow = p["ease_chest"] + 0.015 + p["neck_width"]
+        # the neck opening stops 5 cm short of the shoulder joint, so shoulders (and straps) stay
+        neck_rx, neck_rz = min(nw + grow, sh[0] - 0.05), nd + grow
+
+    # --- clearance (ease) over the body
+    def ease(pts):
+        y = pts[:, 1]
+        if top:
+            e = _interp(y, [chest_y, waist_y, hip_y], [p["ease_chest"], p["ease_waist"], p["ease_hip"]])
+            if sleeve:
+                along = np.clip((np.abs(pts[:, 0]) - sh[0]) / max(p["sleeve_length"], 1e-3), 0.0, 1.0)
+                e = np.where(np.abs(pts[:, 0]) > sh[0], (1 - along) * p["ease_chest"] + along * p["cuff_ease"], e)
+        else:
+            e = _interp(y, [waist_y, hip_y], [p["ease_waist"], p["ease_hip"]])
+            if "leg_ease" in p:
+                hem_y = (ankle_y + p["hem"]) if kind == "pants" else (hip_y - p["hem"])
+                u = np.clip((hip_y - 0.08 - y) / max(hip_y - 0.08 - hem_y, 1e-3), 0.0, 1.0)
+                e = np.where(y < hip_y - 0.08, (1 - u) * p["leg_ease"] + u * p["hem_ease"], e)
+        return np.maximum(e, MIN_CLEARANCE)
+
+    # --- cone for skirts, dresses and coats (from the hips down)
+    def cone_field(pts):
+        x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+        below = np.clip(hip_y - y, 0.0, None)
+        above = np.clip(y - hip_y, 0.0, None)
+        e = p.get("ease_hip", 0.03)
+        a = hw + e + p["flare"] * below - 1.5 * above
+        b = hd + e + p["flare"] * below - 1.5 * above
+        a, b = np.maximum(a, 0.02), np.maximum(b, 0.02)
+        r = np.sqrt((x / a) ** 2 + ((z - hzc) / b) ** 2)
+        return (r - 1.0) * np.minimum(a, b)
+
+    def field(pts):
+        f = levelset.body_sdf(body.verts, body.faces, pts) - ease(pts)
+        if cone:
+            f = levelset.smin(f, cone_field(pts), 0.03)
+        return f
+
+    # --- cuts (keep > 0)
+    if top:
+        hem_y = hip_y - p["hem"]
+    elif kind == "pants":
+        hem_y = ankle_y + p["hem"]
+    else:
+        hem_y = hip_y - p["hem"]
+    if kind == "skirt" and hem_y < knee_y - 0.12:
+        hem_y = knee_y - 0.12
+
+    def keep(pts):
+        x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+        cuts = [y - hem_y]
+        if top:
+            front = np.clip((z - neck[2]) / 0.08, 0.0, 1.0)
+            # the neck tube above the neckline goes, the shoulders beside it stay
+            r = np.hypot(x / neck_rx, (z - neck[2]) / neck_rz)
+            cuts.append(np.maximum((neck[1] - 0.035 - p["neck_drop"] - p["neck_depth"] * front) - y, r - 1.0))
+            cuts.append((neck[1] + 0.06) - y)
+            if sleeve:
+                cuts.append((sh[0] + p["sleeve_length"]) - np.abs(x))
+            else:  # armholes: the arm beyond the shoulder and the side wall down to the armhole line
+                armpit = sh[1] - 0.07 - p["armhole_drop"]
+                cuts.append(np.maximum((sh[0] + 0.005) - np.abs(x), armpit - y))
+            if "opening" in p:
+                cuts.append(np.maximum(np.abs(x) - p["opening"] / 2, (hzc + 0.02) - z))
+        else:
+            cuts.append((waist_y - p["waist"]) - y)
+        return np.minimum.reduce(cuts)
+
+    # --- grid box
+    xr = (sh[0] + p.get("sleeve_length", 0.0) + 0.08) if (top and sleeve) else (hw + 0.3 if cone else sh[0] + 0.12)
+    top_y = neck[1] + 0.08 if top else waist_y + 0.05
+    bottom_y = hem_y - 0.05
+    lo = np.array([-xr, bottom_y, body.verts[:, 2].min() - 0.12 - (0.15 if cone else 0.0)])
+    hi = np.array([xr, top_y, body.verts[:, 2].max() + 0.12 + (0.15 if cone else 0.0)])
+
+    # --- regions and UVs (u along the weft, v along the warp; metres)
+    def regions(v):
+        x, y, z = v[:, 0], v[:, 1], v[:, 2]
+        if top:
+            names = ["front", "back", "left_sleeve", "right_sleeve"]
+            reg = np.where(z > hzc, 0, 1)
+            arm = (np.abs(x) > sh[0] + 0.03) & (y > sh[1] - 0.12)
+            if sleeve:
+                reg = np.where(arm & (x > 0), 2, np.where(arm & (x < 0), 3, reg))
+            uv = np.stack([x, y], axis=1)
+            if sleeve:
+                around = np.arctan2(z - sh[2], y - sh[1]) * 0.06
+                uv = np.where(arm[:, None], np.stack([around, np.abs(x)], axis=1), uv)
+        elif kind == "skirt":
+            names = ["front", "back"]
+            reg = np.where(z > hzc, 0, 1)
+            uv = np.stack([x, y], axis=1)
+        else:
+            names = ["left_front", "left_back", "right_front", "right_back"]
+            reg = np.where(x >= 0, 0, 2) + np.where(z > hzc, 0, 1)
+            uv = np.stack([x, y], axis=1)
+        return tuple(names), reg.astype(np.int32), uv
+
+    return field, keep, lo, hi, regions
