@@ -206,7 +206,6 @@ def _design(kind: str, p: dict, body: _Body):
     knee_y = body.j("left_knee")[1]
     ankle_y = body.j("left_ankle")[1]
     top = kind in ("tshirt", "long_sleeve_shirt", "tank_top", "jacket", "coat", "dress")
-    lower = kind in ("skirt", "pants", "shorts")
     sleeve = "sleeve_length" in p
     cone = "flare" in p
     hw, hd, hzc = body.half_extent(hip_y - 0.03)

@@ -107,3 +107,39 @@ def test_cli_list_and_make_with_picture(tmp_path, capsys):
     assert out.stat().st_size > 0 and png.stat().st_size > 10_000
     assert main(["garment", "make", "--type", "cape", "--out", str(tmp_path / "x.obj")]) == 2
     assert "types:" in capsys.readouterr().err
+
+
+def test_file_garment_units_and_up_axis_guessed(garments, tmp_path):
+    import trimesh
+
+    g = garments["skirt"]
+    # written in centimetres with Z up, as some tools export
+    v = g.vertices[:, [0, 2, 1]] * np.array([1.0, -1.0, 1.0]) * 100.0
+    trimesh.Trimesh(v, g.faces, process=False).export(tmp_path / "skirt_cm.obj")
+    from datagen.garment.files import load_garment_file
+
+    back = load_garment_file(tmp_path / "skirt_cm.obj")
+    assert back.metadata["units"] == "cm" and back.metadata["up_axis"] == "z"
+    np.testing.assert_allclose(back.vertices, g.vertices, atol=1e-6)
+    assert len(back.loops) == 2
+
+
+def test_file_garment_refuses_what_cannot_be_simulated(tmp_path):
+    import trimesh
+
+    from datagen.garment.files import load_garment_file
+
+    a = trimesh.creation.box()
+    b = trimesh.creation.box()
+    b.apply_translation([3.0, 0, 0])
+    trimesh.util.concatenate([a, b]).export(tmp_path / "two.obj")
+    with pytest.raises(InputError, match="2 separate pieces"):
+        load_garment_file(tmp_path / "two.obj", units="m")
+    # three triangles on one edge: non-manifold
+    v = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1]], dtype=float)
+    f = np.array([[0, 1, 2], [1, 0, 3], [0, 1, 4]])
+    trimesh.Trimesh(v, f, process=False).export(tmp_path / "fin.ply")
+    with pytest.raises(InputError, match="non-manifold edges"):
+        load_garment_file(tmp_path / "fin.ply", units="m")
+    with pytest.raises(InputError, match="does not exist"):
+        load_garment_file(tmp_path / "none.obj")
