@@ -184,9 +184,12 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     h = grid_spacing or min(0.01, target_edge_length / 2)
     field, keep, lo, hi, regions = _design(kind, p, body)
     rough_v, rough_f = levelset.extract_surface(field, lo, hi, h)
-    rough_v, rough_f = levelset.cut_mesh(rough_v, rough_f, keep(rough_v), snap=0.3 * h)
-    rough_v, rough_f = levelset.largest_component(rough_v, rough_f)
-    v, f = levelset.remesh(rough_v, rough_f, target_edge_length)
+    # remesh the closed surface first, so the cut meets edges of the target length and leaves a
+    # boundary spaced like the rest; then cut, and remesh again to even out the cut's neighbourhood
+    v, f = levelset.remesh(rough_v, rough_f, target_edge_length, iterations=5)
+    v, f = levelset.cut_mesh(v, f, keep(v), snap=0.3 * target_edge_length)
+    v, f = levelset.largest_component(v, f)
+    v, f = levelset.remesh(v, f, target_edge_length, iterations=5)
     v, f = levelset.largest_component(v, f)
     region_names, vertex_region, uv = regions(v)
     seconds = time.perf_counter() - t0
@@ -265,9 +268,11 @@ def _design(kind: str, p: dict, body: _Body):
         if top:
             front = np.clip((z - neck[2]) / 0.08, 0.0, 1.0)
             # the neck tube above the neckline goes, the shoulders beside it stay
-            r = np.hypot(x / neck_rx, (z - neck[2]) / neck_rz)
+            # the opening widens upward (a cone around the neck), so the head is inside it
+            rise = 1.5 * np.clip(y - (neck[1] + 0.03), 0.0, None)
+            r = np.hypot(x / (neck_rx + rise), (z - neck[2]) / (neck_rz + rise))
             cuts.append(np.maximum((neck[1] - 0.035 - p["neck_drop"] - p["neck_depth"] * front) - y, r - 1.0))
-            cuts.append((neck[1] + 0.06) - y)
+            cuts.append((neck[1] + 0.1) - y)
             if sleeve:
                 cuts.append((sh[0] + p["sleeve_length"]) - np.abs(x))
             else:  # armholes: the arm beyond the shoulder and the side wall down to the armhole line
@@ -281,7 +286,7 @@ def _design(kind: str, p: dict, body: _Body):
 
     # --- grid box
     xr = (sh[0] + p.get("sleeve_length", 0.0) + 0.08) if (top and sleeve) else (hw + 0.3 if cone else sh[0] + 0.12)
-    top_y = neck[1] + 0.08 if top else waist_y + 0.05
+    top_y = neck[1] + 0.12 if top else waist_y + 0.05
     bottom_y = hem_y - 0.05
     lo = np.array([-xr, bottom_y, body.verts[:, 2].min() - 0.12 - (0.15 if cone else 0.0)])
     hi = np.array([xr, top_y, body.verts[:, 2].max() + 0.12 + (0.15 if cone else 0.0)])
