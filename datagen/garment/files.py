@@ -11,7 +11,7 @@ from datagen.errors import InputError
 from datagen.garment.materials import Material, material
 from datagen.garment.mesh import GarmentMesh
 
-__all__ = ["load_garment_file", "UNIT_SCALES"]
+__all__ = ["UNIT_SCALES", "load_garment_file"]
 
 log = logging.getLogger(__name__)
 
