@@ -30,7 +30,7 @@ def register(sub, formatter) -> None:
     p.add_argument("--type", required=True, help="a type from `drape garment list`")
     p.add_argument("--seed", type=int, default=0, help="draws the style parameters")
     p.add_argument("--body", default="regular", help="body shape preset: thin, regular, fat")
-    p.add_argument("--edge-length", type=float, default=0.02, help="target edge length (m)")
+    p.add_argument("--edge-length", type=float, default=None, help="target edge length (m); default the type's")
     p.add_argument("--material", help="material preset (default: the type's)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE", help="fix a style parameter (repeatable)")
     p.add_argument("--out", required=True, help="output file (.obj, .ply or .npz)")

@@ -63,7 +63,7 @@ GARMENT_TYPES: dict[str, dict] = {
                                      "sleeve_length": ParamSpec(0.38, 0.47, "sleeve from the shoulder joint (m)")},
                           "material": "cotton", "loops": 4},
     "tank_top": {"params": {**_TOP, "armhole_drop": ParamSpec(0.02, 0.07, "armhole below the armpit line (m)")},
-                 "material": "jersey", "loops": 4},
+                 "material": "jersey", "loops": 4, "edge": 0.018},
     "jacket": {"params": {**_TOP, **_SLEEVE,
                           "ease_chest": ParamSpec(0.035, 0.07, "clearance at the chest (m)"),
                           "ease_waist": ParamSpec(0.04, 0.08, "clearance at the waist (m)"),
@@ -88,7 +88,7 @@ GARMENT_TYPES: dict[str, dict] = {
                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
                          "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
                          "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"), **_SKIRT},
-              "material": "cotton", "loops": 2},
+              "material": "cotton", "loops": 2, "edge": 0.0145},
     "pants": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
                          "leg_ease": ParamSpec(0.015, 0.04, "clearance around the thigh (m)"),
@@ -102,9 +102,11 @@ GARMENT_TYPES: dict[str, dict] = {
                           "hem_ease": ParamSpec(0.025, 0.06, "clearance at the hem (m)"),
                           "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
                           "hem": ParamSpec(0.25, 0.36, "hem below the hip joints (m)")},
-               "material": "cotton", "loops": 3},
+               "material": "cotton", "loops": 3, "edge": 0.016},
 }
-"""Every garment type: its style parameters, default material and number of boundary loops."""
+"""Every garment type: its style parameters, default material, number of boundary loops and
+default edge length (``edge``, m; 0.02 where absent), chosen so every type has 2,000-8,000
+vertices by default."""
 
 
 def garment_params(kind: str, seed: int, overrides: dict | None = None) -> dict[str, float]:
@@ -150,7 +152,7 @@ def _interp(y, ys, vals):
 
 
 def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: dict | None = None,
-                 target_edge_length: float = 0.02, material_name: str | Material | None = None,
+                 target_edge_length: float | None = None, material_name: str | Material | None = None,
                  grid_spacing: float | None = None) -> GarmentMesh:
     """Build a garment of type ``kind`` on ``body_model`` (shape ``betas``) in its rest pose.
 
@@ -160,7 +162,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
         betas: body shape [shape_dim] (default zeros).
         seed: draws the style parameters.
         params: style parameters to fix (each within its range).
-        target_edge_length: remeshing target (m); the default gives 2,000-8,000 vertices.
+        target_edge_length: remeshing target (m); default the type's (2,000-8,000 vertices).
         material_name: a preset name or a :class:`Material`; default the type's.
         grid_spacing: marching-cubes grid step (m); default ``min(0.01, edge / 2)``.
     """
@@ -168,6 +170,8 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     p = garment_params(kind, seed, params)
     spec = GARMENT_TYPES[kind]
     mat = material(material_name or spec["material"])
+    if target_edge_length is None:
+        target_edge_length = spec.get("edge", 0.02)
     if not (np.isfinite(target_edge_length) and target_edge_length > 0):
         raise InputError(f"target edge length must be a positive number of metres, got {target_edge_length!r}")
     betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
@@ -182,7 +186,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
                          f"(~{est_vertices * 2 * 3 * 8 * 40 / 1e9:.1f} GB to simulate); the smallest allowed is "
                          f"{smallest:.4f} m ({MAX_VERTICES:,} vertices)")
     h = grid_spacing or min(0.01, target_edge_length / 2)
-    field, keep, lo, hi, regions = _design(kind, p, body)
+    field, keep, lo, hi, regions = _design(kind, p, body, h)
     rough_v, rough_f = levelset.extract_surface(field, lo, hi, h)
     # remesh the closed surface first, so the cut meets edges of the target length and leaves a
     # boundary spaced like the rest; then cut, and remesh again to even out the cut's neighbourhood
@@ -199,7 +203,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
                               metadata=meta)
 
 
-def _design(kind: str, p: dict, body: _Body):
+def _design(kind: str, p: dict, body: _Body, spacing: float):
     """The implicit field, the keep (cut) field, the grid box and the region labeller of a garment."""
     sh = body.j("left_shoulder")
     neck = body.j("neck")
@@ -246,10 +250,21 @@ def _design(kind: str, p: dict, body: _Body):
         r = np.sqrt((x / a) ** 2 + ((z - hzc) / b) ** 2)
         return (r - 1.0) * np.minimum(a, b)
 
+    # pants and shorts: the legs are separate tubes below the crotch, even where the clearances
+    # around two close thighs would merge: a slot at the body's mid-plane, 1.2 grid steps wide so
+    # marching cubes resolves it
+    inner = body.verts[(np.abs(body.verts[:, 0]) < 0.015) & (body.verts[:, 1] < hip_y)]
+    crotch_y = float(inner[:, 1].min()) if len(inner) else hip_y - 0.1
+
     def field(pts):
         f = levelset.body_sdf(body.verts, body.faces, pts) - ease(pts)
         if cone:
             f = levelset.smin(f, cone_field(pts), 0.03)
+        if "leg_ease" in p:
+            # from below the garment's own crotch (the body's crotch less the clearance)
+            below = np.clip(crotch_y - p["ease_hip"] - 0.015 - pts[:, 1], 0.0, None)
+            slot = np.minimum(0.6 * spacing, below) - np.abs(pts[:, 0])
+            f = np.maximum(f, slot)
         return f
 
     # --- cuts (keep > 0)

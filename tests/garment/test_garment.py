@@ -23,7 +23,7 @@ def test_every_type_builds_and_passes_every_check(garments, default_body):
     for kind, g in garments.items():
         c = check_garment(g, default_body.v_template, default_body.faces)
         assert c["ok"], (kind, c["failures"])
-        assert 1000 <= g.vertex_count <= 8000, kind
+        assert 2000 <= g.vertex_count <= 8000, kind
         assert c["min_clearance"] >= 0.005, kind
         assert c["edge_spread"] < 0.25 and c["angle_p1_deg"] > 25.0, kind
         assert len(g.loops) == GARMENT_TYPES[kind]["loops"] == g.metadata["boundary_loops"]
