@@ -35,7 +35,7 @@ def main() -> None:
     model = default_body()
     bodies = {b: resolve_betas(model, body=b)[0] for b in args.bodies.split(",")}
     shaped = {b: np.asarray(model.shaped(beta))[0] for b, beta in bodies.items()}
-    print(f"{args.seeds} seeds x {len(bodies)} bodies ({args.bodies}) per type, edge length {args.edge_length or "each type's default"}")
+    print(f"{args.seeds} seeds x {len(bodies)} bodies ({args.bodies}) per type, edge length {args.edge_length or 'each type default'}")
     head = (f"{'type':18s} {'n':>4s} {'vertices':>11s} {'build s':>7s} {'min angle':>9s} {'p1 angle':>8s} "
             f"{'spread':>6s} {'clear mm':>8s} {'failed':>6s}  failures")
     print(head)
