@@ -85,8 +85,9 @@ def extract_surface(field, lo: np.ndarray, hi: np.ndarray, spacing: float) -> tu
             values[tuple(index)] = spacing
     verts, faces, _, _ = marching_cubes(values, level=0.0, spacing=(spacing, spacing, spacing))
     verts += lo
-    # skimage orients faces toward decreasing values for this call; flip to face the positive side
-    return verts, faces[:, ::-1].astype(np.int64)
+    # skimage's winding already faces increasing values (checked on a sphere: normals point out of
+    # an inside-negative field), so the faces are kept as they come
+    return verts, faces.astype(np.int64)
 
 
 def cut_mesh(vertices: np.ndarray, faces: np.ndarray, keep: np.ndarray, snap: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
