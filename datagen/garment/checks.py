@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["check_garment", "placement", "quality", "self_intersections", "topology"]
+__all__ = ["check_garment", "orientation", "placement", "quality", "self_intersections", "topology"]
 
 
 def topology(vertices: np.ndarray, faces: np.ndarray) -> dict:
@@ -78,7 +78,13 @@ def _kernels():
             if q.result:
                 out[tid] = 1
 
-        _KERNELS["inside"], _KERNELS["crossing"] = inside, crossing
+        @wp.kernel
+        def closest(mesh: wp.uint64, pts: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
+            tid = wp.tid()
+            q = wp.mesh_query_point_no_sign(mesh, pts[tid], 10.0)
+            out[tid] = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
+
+        _KERNELS["inside"], _KERNELS["crossing"], _KERNELS["closest"] = inside, crossing, closest
     return _KERNELS
 
 
@@ -118,11 +124,27 @@ def placement(vertices: np.ndarray, faces: np.ndarray, body_vertices: np.ndarray
     return {"vertices_inside": int((sd < 0).sum()), "edge_crossings": crossings, "min_clearance": float(sd.min())}
 
 
+def orientation(vertices: np.ndarray, faces: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray) -> dict:
+    """Share of the garment's area whose face normal points away from the body: the normal of each
+    face against the direction from the closest body point to the face's centre (1.0: all outward)."""
+    import warp as wp
+
+    tri = np.asarray(vertices)[np.asarray(faces)]
+    n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+    area = 0.5 * np.linalg.norm(n, axis=1)
+    centre = tri.mean(axis=1)
+    body = _wmesh(body_vertices, body_faces)
+    out = wp.zeros(len(centre), dtype=wp.vec3)
+    wp.launch(_kernels()["closest"], dim=len(centre), inputs=[body.id, wp.array(centre.astype(np.float32), dtype=wp.vec3), out])
+    away = np.einsum("ij,ij->i", n, centre - out.numpy().astype(np.float64)) > 0
+    return {"outward_area_fraction": float(area[away].sum() / max(area.sum(), 1e-30))}
+
+
 def check_garment(garment, body_vertices: np.ndarray, body_faces: np.ndarray) -> dict:
     """Every check on ``garment`` (a :class:`~datagen.garment.mesh.GarmentMesh`) and a verdict."""
     v, f = garment.vertices, garment.faces
     out = {**topology(v, f), **quality(v, f), "self_intersecting_faces": self_intersections(v, f),
-           **placement(v, f, body_vertices, body_faces)}
+           **placement(v, f, body_vertices, body_faces), **orientation(v, f, body_vertices, body_faces)}
     failures = []
     if out["non_manifold_edges"] or out["non_manifold_vertices"]:
         failures.append("non-manifold")
@@ -132,6 +154,8 @@ def check_garment(garment, body_vertices: np.ndarray, body_faces: np.ndarray) ->
         failures.append("inconsistent winding")
     if out["boundary_loops"] != garment.metadata.get("expected_boundary_loops", out["boundary_loops"]):
         failures.append(f"{out['boundary_loops']} boundary loops, expected {garment.metadata['expected_boundary_loops']}")
+    if out["outward_area_fraction"] < 0.9:
+        failures.append(f"normals face the body ({100 * (1 - out['outward_area_fraction']):.0f}% of the area points inwards)")
     if out["self_intersecting_faces"]:
         failures.append(f"{out['self_intersecting_faces']} self-intersecting faces")
     if out["vertices_inside"] or out["edge_crossings"]:

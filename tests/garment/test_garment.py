@@ -25,6 +25,7 @@ def test_every_type_builds_and_passes_every_check(garments, default_body):
         assert c["ok"], (kind, c["failures"])
         assert 2000 <= g.vertex_count <= 8000, kind
         assert c["min_clearance"] >= 0.005, kind
+        assert c["outward_area_fraction"] > 0.95, kind
         assert c["edge_spread"] < 0.25 and c["angle_p1_deg"] > 25.0, kind
         assert len(g.loops) == GARMENT_TYPES[kind]["loops"] == g.metadata["boundary_loops"]
         assert g.vertex_region.shape == (g.vertex_count,) and g.uv.shape == (g.vertex_count, 2)
