@@ -45,7 +45,8 @@ class GarmentMesh:
             is the constructed shape in the body's frame; the simulator starts from it).
         faces: triangles [F, 3] (int64), outward-facing (away from the body).
         uv: material coordinates [V, 2] in metres: u along the weft (around the body or limb),
-            v along the warp (down the body, along the limb).
+            v along the warp (up the body, along the limb); each vertex in its own panel's chart
+            (see ``face_uv`` for what a simulator should use).
         vertex_region: panel index per vertex [V] into ``region_names``.
         face_region: panel index per face [F] (the majority of its corners).
         region_names: panel names.
@@ -53,6 +54,11 @@ class GarmentMesh:
         loops: named open boundaries: name -> vertex ids in order.
         material: the cloth material.
         metadata: type, style parameters, seed, body β, counts, rest area, edge length, ...
+        face_uv: material coordinates of every face corner [F, 3, 2] (m), all three in the chart
+            of the face's panel, so every face has a valid (u, v) frame, also on seams and where
+            a sleeve's chart wraps at its underarm seam; :meth:`material_frames` gives the
+            directions. The rest metric is the 3D rest shape; the UVs give directions and
+            approximate lengths (u is an angle times the panel's mean radius).
     """
 
     vertices: np.ndarray
@@ -65,10 +71,15 @@ class GarmentMesh:
     loops: dict[str, np.ndarray]
     material: Material
     metadata: dict = field(default_factory=dict)
+    face_uv: np.ndarray | None = None
 
     @classmethod
-    def create(cls, vertices, faces, *, uv, vertex_region, region_names, material, metadata) -> GarmentMesh:
-        """Derive face regions, seams, named loops and counts, and build the garment."""
+    def create(cls, vertices, faces, *, uv, vertex_region, region_names, material, metadata, face_uv=None,
+               extra_seam=None) -> GarmentMesh:
+        """Derive face regions, seams, named loops and counts, and build the garment.
+
+        ``face_uv`` [F, 3, 2] defaults to the vertices' UVs; ``extra_seam`` [V] marks seams that
+        are not panel borders (a sleeve's underarm seam)."""
         v = np.asarray(vertices, dtype=np.float64)
         f = np.asarray(faces, dtype=np.int64)
         vr = np.asarray(vertex_region, dtype=np.int32)
@@ -79,16 +90,44 @@ class GarmentMesh:
             diff = corner[:, a] != corner[:, b]
             seam[f[diff, a]] = True
             seam[f[diff, b]] = True
-        loops = _name_loops(v, boundary_loops(f))
+        if extra_seam is not None:
+            seam |= np.asarray(extra_seam, dtype=bool)
+        loops = _name_loops(v, boundary_loops(f), metadata.get("type"))
         area = float(0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum())
         meta = {**metadata, "vertex_count": len(v), "face_count": len(f), "rest_area_m2": area,
                 "boundary_loops": len(loops), "material": material.as_dict()}
         return cls(vertices=v, faces=f, uv=np.asarray(uv, dtype=np.float64), vertex_region=vr, face_region=fr,
-                   region_names=tuple(region_names), seam_vertex=seam, loops=loops, material=material, metadata=meta)
+                   region_names=tuple(region_names), seam_vertex=seam, loops=loops, material=material, metadata=meta,
+                   face_uv=np.asarray(uv, dtype=np.float64)[f] if face_uv is None else np.asarray(face_uv, dtype=np.float64))
 
     @property
     def vertex_count(self) -> int:
         return len(self.vertices)
+
+    def material_frames(self) -> np.ndarray:
+        """Unit weft and warp directions of every face [F, 2, 3] (rest shape).
+
+        ``[:, 0]`` is the weft: along the face's line of constant v (horizontal on the trunk and
+        legs, around the arm on sleeves), pointing to increasing u; where v barely changes over a
+        face (the top of a shoulder) it is the direction in which u grows fastest. ``[:, 1]`` is
+        the warp, the in-plane perpendicular normal × weft (up the body, along the limb).
+        """
+        tri = self.vertices[self.faces]
+        fuv = self.uv[self.faces] if self.face_uv is None else self.face_uv
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        area2 = np.linalg.norm(n, axis=1, keepdims=True) + 1e-30
+        n /= area2
+        grad = np.zeros((len(tri), 2, 3))
+        for k in range(3):  # gradient of a linear function on a triangle: sum f_k (n x e_k) / (2 area)
+            e = np.cross(n, tri[:, (k + 2) % 3] - tri[:, (k + 1) % 3]) / area2
+            grad += fuv[:, k, :, None] * e[:, None, :]
+        gu, gv = grad[:, 0], grad[:, 1]
+        along = np.cross(gv, n)  # the line of constant v
+        along *= np.sign(np.einsum("ij,ij->i", along, gu))[:, None]
+        steep = np.linalg.norm(gv, axis=1) > 0.3  # v changes enough over the face to define its level line
+        weft = np.where(steep[:, None], along, gu)
+        weft /= np.linalg.norm(weft, axis=1, keepdims=True) + 1e-30
+        return np.stack([weft, np.cross(n, weft)], axis=1)
 
     def save(self, path: str | Path) -> Path:
         """Write ``.obj``/``.ply`` (geometry, via trimesh) or ``.npz`` (everything, no pickles)."""
@@ -101,7 +140,9 @@ class GarmentMesh:
         elif suffix == ".npz":
             loops = {f"loop_{k}": v for k, v in self.loops.items()}
             with open(path, "wb") as fh:
-                np.savez(fh, vertices=self.vertices, faces=self.faces, uv=self.uv, vertex_region=self.vertex_region,
+                np.savez(fh, vertices=self.vertices, faces=self.faces, uv=self.uv,
+                         face_uv=self.uv[self.faces] if self.face_uv is None else self.face_uv,
+                         vertex_region=self.vertex_region,
                          face_region=self.face_region, seam_vertex=self.seam_vertex,
                          region_names=np.array(json.dumps(list(self.region_names))),
                          material=np.array(json.dumps(self.material.as_dict())),
@@ -122,25 +163,45 @@ def load_garment(path: str | Path) -> GarmentMesh:
                            face_region=d["face_region"], region_names=tuple(json.loads(str(d["region_names"]))),
                            seam_vertex=d["seam_vertex"], loops=loops,
                            material=Material(**json.loads(str(d["material"]))),
-                           metadata=json.loads(str(d["metadata"])))
+                           metadata=json.loads(str(d["metadata"])),
+                           face_uv=d["face_uv"] if "face_uv" in d.files else None)
 
 
-def _name_loops(v: np.ndarray, loops: list[np.ndarray]) -> dict[str, np.ndarray]:
-    """Name open boundaries by where they are: the highest is the neck or waist, the lowest the hem,
-    the outermost on each side a cuff (or leg hem), the rest by index."""
+_SIDE_OPENING = {"tshirt": "cuff", "long_sleeve_shirt": "cuff", "jacket": "cuff", "coat": "cuff",
+                 "tank_top": "armhole", "dress": "armhole", "pants": "hem", "shorts": "hem"}
+"""What the openings left and right of the body's midline are, per garment type."""
+
+
+def _name_loops(v: np.ndarray, loops: list[np.ndarray], kind: str | None = None) -> dict[str, np.ndarray]:
+    """Name open boundaries by where they are and what the garment is.
+
+    Openings off the midline (centre more than 6 cm from it) are ``left_``/``right_`` plus
+    ``cuff`` (sleeved tops), ``armhole`` (tank top, dress) or ``hem`` (pants, shorts). Of the
+    openings on the midline the highest is ``neck`` (tops) or ``waist`` (skirts, pants, shorts)
+    and the lowest ``hem``; jackets and coats have one midline opening, the neckline, the open
+    front and the hem together: ``neck_front_hem``. Garments of other origins (files) get
+    ``top_opening``, ``hem``, ``left_opening``, ``right_opening`` and ``opening`` by position.
+    """
     if not loops:
         return {}
     centres = np.array([v[lp].mean(0) for lp in loops])
-    names: dict[str, np.ndarray] = {}
-    order = sorted(range(len(loops)), key=lambda i: -abs(centres[i, 0]))
-    out = {}
-    for i in order:
+    known = kind in _SIDE_OPENING or kind == "skirt"
+    side_word = _SIDE_OPENING.get(kind or "")
+    side_limit = 0.06 if side_word else 0.12
+    top_word = "waist" if kind in ("skirt", "pants", "shorts") else "neck"
+    out: dict[str, np.ndarray] = {}
+    mid = [i for i in range(len(loops)) if abs(centres[i, 0]) <= side_limit]
+    for i in sorted(range(len(loops)), key=lambda i: -abs(centres[i, 0])):
         c = centres[i]
-        if abs(c[0]) > 0.12:
-            name = "left_opening" if c[0] > 0 else "right_opening"
-        elif c[1] == centres[:, 1].max():
-            name = "top_opening"
-        elif c[1] == centres[:, 1].min():
+        if abs(c[0]) > side_limit:
+            name = ("left_" if c[0] > 0 else "right_") + (side_word or "opening")
+        elif kind in ("jacket", "coat") and len(mid) == 1:
+            name = "neck_front_hem"
+        elif kind in ("pants", "shorts") and c[1] == centres[mid, 1].max():
+            name = "waist"
+        elif c[1] == centres[mid, 1].max() and len(mid) > 1:
+            name = top_word if known else "top_opening"
+        elif c[1] == centres[mid, 1].min():
             name = "hem"
         else:
             name = "opening"
@@ -149,5 +210,4 @@ def _name_loops(v: np.ndarray, loops: list[np.ndarray]) -> dict[str, np.ndarray]
             k += 1
             name = f"{base}_{k}"
         out[name] = loops[i]
-    names.update(out)
-    return names
+    return out

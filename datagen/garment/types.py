@@ -44,7 +44,7 @@ _TOP = {
     "ease_chest": ParamSpec(0.015, 0.05, "clearance at the chest (m)"),
     "ease_waist": ParamSpec(0.015, 0.06, "clearance at the waist (m)"),
     "ease_hip": ParamSpec(0.015, 0.05, "clearance at the hips (m)"),
-    "hem": ParamSpec(0.0, 0.12, "hem below the hip joints (m)"),
+    "hem": ParamSpec(0.0, 0.12, "hem below the hip joints (m; kept 1.5 cm above the crotch)"),
     "neck_drop": ParamSpec(0.0, 0.03, "neckline lowered all round (m)"),
     "neck_width": ParamSpec(0.0, 0.03, "neck opening wider than the neck and its clearance (m)"),
     "neck_depth": ParamSpec(0.0, 0.09, "extra depth of the neckline at the front (m)"),
@@ -58,12 +58,12 @@ _SKIRT = {
 }
 
 GARMENT_TYPES: dict[str, dict] = {
-    "tshirt": {"params": {**_TOP, **_SLEEVE}, "material": "jersey", "loops": 4},
+    "tshirt": {"params": {**_TOP, **_SLEEVE}, "material": "jersey", "loops": 4, "edge": 0.018},
     "long_sleeve_shirt": {"params": {**_TOP, **_SLEEVE,
                                      "sleeve_length": ParamSpec(0.38, 0.47, "sleeve from the shoulder joint (m)")},
                           "material": "cotton", "loops": 4},
     "tank_top": {"params": {**_TOP, "armhole_drop": ParamSpec(0.02, 0.07, "armhole below the armpit line (m)")},
-                 "material": "jersey", "loops": 4, "edge": 0.018},
+                 "material": "jersey", "loops": 4, "edge": 0.016},
     "jacket": {"params": {**_TOP, **_SLEEVE,
                           "ease_chest": ParamSpec(0.035, 0.07, "clearance at the chest (m)"),
                           "ease_waist": ParamSpec(0.04, 0.08, "clearance at the waist (m)"),
@@ -88,7 +88,7 @@ GARMENT_TYPES: dict[str, dict] = {
                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
                          "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
                          "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"), **_SKIRT},
-              "material": "cotton", "loops": 2, "edge": 0.0145},
+              "material": "cotton", "loops": 2, "edge": 0.013},
     "pants": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
                          "leg_ease": ParamSpec(0.015, 0.04, "clearance around the thigh (m)"),
@@ -102,7 +102,7 @@ GARMENT_TYPES: dict[str, dict] = {
                           "hem_ease": ParamSpec(0.025, 0.06, "clearance at the hem (m)"),
                           "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
                           "hem": ParamSpec(0.25, 0.36, "hem below the hip joints (m)")},
-               "material": "cotton", "loops": 3, "edge": 0.016},
+               "material": "cotton", "loops": 3, "edge": 0.015},
 }
 """Every garment type: its style parameters, default material, number of boundary loops and
 default edge length (``edge``, m; 0.02 where absent), chosen so every type has 2,000-8,000
@@ -164,7 +164,9 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
         params: style parameters to fix (each within its range).
         target_edge_length: remeshing target (m); default the type's (2,000-8,000 vertices).
         material_name: a preset name or a :class:`Material`; default the type's.
-        grid_spacing: marching-cubes grid step (m); default ``min(0.01, edge / 2)``.
+        grid_spacing: marching-cubes grid step (m); default ``min(0.01, max(edge / 1.3, 0.004))``:
+            1 cm for every type's default edge length (the remeshing reprojects onto the extracted
+            surface, which is smooth at that scale), finer for finer meshes.
     """
     t0 = time.perf_counter()
     p = garment_params(kind, seed, params)
@@ -185,7 +187,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
         raise InputError(f"edge length {target_edge_length:g} m would give a {kind} of about {est_vertices:,} vertices "
                          f"(~{est_vertices * 2 * 3 * 8 * 40 / 1e9:.1f} GB to simulate); the smallest allowed is "
                          f"{smallest:.4f} m ({MAX_VERTICES:,} vertices)")
-    h = grid_spacing or min(0.01, target_edge_length / 2)
+    h = grid_spacing or min(0.01, max(target_edge_length / 1.3, 0.004))
     field, keep, lo, hi, regions = _design(kind, p, body, h)
     rough_v, rough_f = levelset.extract_surface(field, lo, hi, h)
     # remesh the closed surface first, so the cut meets edges of the target length and leaves a
@@ -195,12 +197,60 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     v, f = levelset.largest_component(v, f)
     v, f = levelset.remesh(v, f, target_edge_length, iterations=5)
     v, f = levelset.largest_component(v, f)
-    region_names, vertex_region, uv = regions(v)
+    region_names, vertex_region, chart = regions(v)
+    uv, face_uv, wrap_seam = _panel_uvs(v, f, vertex_region, region_names, chart)
     seconds = time.perf_counter() - t0
     meta = {"type": kind, "params": p, "seed": int(seed), "betas": betas.tolist(), "target_edge_length": target_edge_length,
             "expected_boundary_loops": spec["loops"], "builder_version": BUILDER_VERSION, "build_seconds": seconds}
     return GarmentMesh.create(v, f, uv=uv, vertex_region=vertex_region, region_names=region_names, material=mat,
-                              metadata=meta)
+                              metadata=meta, face_uv=face_uv, extra_seam=wrap_seam)
+
+
+def _panel_uvs(v: np.ndarray, f: np.ndarray, vertex_region: np.ndarray, names, chart):
+    """Per-vertex UVs [V, 2] (each vertex in its own panel's chart), per-face-corner UVs
+    [F, 3, 2] (every corner in its face's panel's chart, angles unwrapped within the face, so
+    each face has a valid material frame even on a seam or where a sleeve's angle wraps), and a
+    [V] mask of the vertices along such a wrap (a sleeve's underarm seam).
+
+    u = angle × the panel's mean radius (metres around the body or limb), v = height or distance
+    along the arm (metres). A panel whose chart would be mirrored against the outward normal has
+    its u negated, so every face's (u, v) frame has the orientation of its normal.
+    """
+    corner = vertex_region[f]
+    face_region = np.where(corner[:, 1] == corner[:, 2], corner[:, 1], corner[:, 0])
+    uv = np.zeros((len(v), 2))
+    face_uv = np.zeros((len(f), 3, 2))
+    seam = np.zeros(len(v), dtype=bool)
+    for r, name in enumerate(names):
+        fs = np.flatnonzero(face_region == r)
+        vs = np.flatnonzero(vertex_region == r)
+        if len(fs) == 0 and len(vs) == 0:
+            continue
+        pts = v[f[fs]].reshape(-1, 3)
+        ang, vv = chart(pts, name)
+        ang, vv = ang.reshape(-1, 3), vv.reshape(-1, 3)
+        wraps = np.ptp(ang, axis=1) > np.pi  # faces across the angle's wrap (a sleeve's underarm seam)
+        seam[f[fs][wraps][ang[wraps] < 0]] = True
+        ang = ang[:, :1] + (ang - ang[:, :1] + np.pi) % (2 * np.pi) - np.pi  # unwrap within each face
+        # the panel's mean distance from its chart's axis, from how far its corners' angles are apart
+        tri = v[f[fs]]
+        edge3d = np.linalg.norm(tri - np.roll(tri, 1, axis=1), axis=2)
+        dang = np.abs(ang - np.roll(ang, 1, axis=1))
+        dv = np.abs(vv - np.roll(vv, 1, axis=1))
+        horizontal = dang > 1e-9
+        radius = float(np.median(np.sqrt(np.maximum(edge3d**2 - dv**2, 0.0))[horizontal] / dang[horizontal])) if horizontal.any() else 0.1
+        fu = np.stack([radius * ang, vv], axis=-1)
+        # orientation: faces wind around their outward normal, so a non-mirrored chart gives
+        # each face a positive signed area in (u, v)
+        du = fu[:, 1:] - fu[:, :1]
+        det = du[:, 0, 0] * du[:, 1, 1] - du[:, 0, 1] * du[:, 1, 0]
+        sign = -1.0 if np.sum(det < 0) > np.sum(det > 0) else 1.0
+        fu[..., 0] *= sign
+        face_uv[fs] = fu
+        if len(vs):
+            a, b = chart(v[vs], name)
+            uv[vs] = np.stack([sign * radius * a, b], axis=1)
+    return uv, face_uv, seam
 
 
 def _design(kind: str, p: dict, body: _Body, spacing: float):
@@ -276,6 +326,10 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
         hem_y = hip_y - p["hem"]
     if kind == "skirt" and hem_y < knee_y - 0.12:
         hem_y = knee_y - 0.12
+    if top and not cone:
+        # a top without a skirt part ends above the crotch: below it the clearance around the
+        # legs splits in two and the hem would become two openings (thin bodies, long hems)
+        hem_y = max(hem_y, crotch_y + 0.015)
 
     def keep(pts):
         x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
@@ -307,6 +361,31 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
     hi = np.array([xr, top_y, body.verts[:, 2].max() + 0.12 + (0.15 if cone else 0.0)])
 
     # --- regions and UVs (u along the weft, v along the warp; metres)
+    # Each panel has a cylindrical chart: an angle around an axis (the trunk's vertical centre
+    # line, an arm's shoulder line, a leg's hip-ankle line) times the panel's mean radius gives u
+    # (around the body or limb), and the height (trunk, legs) or the distance along the arm gives
+    # v. Torso panels measure their angle from their own centre (front from the front, back from
+    # the back), so no panel wraps; a sleeve's angle is measured from its top and wraps at the
+    # underarm, its seam. ``chart`` returns (angle [N], v [N]) for points [N, 3] of one panel.
+    hip_l, ankle_l = body.j("left_hip"), body.j("left_ankle")
+    leg_axis = (ankle_l - hip_l) / np.linalg.norm(ankle_l - hip_l)
+
+    def chart(pts, name):
+        x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
+        if name.endswith("sleeve"):
+            side = 1.0 if name.startswith("left") else -1.0
+            return np.arctan2(z - sh[2], y - sh[1]), side * x - sh[0]
+        if name.startswith(("left_", "right_")):  # a leg panel of pants or shorts
+            side = 1.0 if name.startswith("left") else -1.0
+            origin = hip_l * np.array([side, 1.0, 1.0])
+            axis = leg_axis * np.array([side, 1.0, 1.0])
+            d = pts - origin
+            d = d - (d @ axis)[:, None] * axis
+            back = -1.0 if name.endswith("back") else 1.0
+            return np.arctan2(back * side * d[:, 0], back * d[:, 2]), y
+        back = -1.0 if name == "back" else 1.0
+        return np.arctan2(back * x, back * (z - hzc)), y
+
     def regions(v):
         x, y, z = v[:, 0], v[:, 1], v[:, 2]
         if top:
@@ -315,18 +394,12 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
             arm = (np.abs(x) > sh[0] + 0.03) & (y > sh[1] - 0.12)
             if sleeve:
                 reg = np.where(arm & (x > 0), 2, np.where(arm & (x < 0), 3, reg))
-            uv = np.stack([x, y], axis=1)
-            if sleeve:
-                around = np.arctan2(z - sh[2], y - sh[1]) * 0.06
-                uv = np.where(arm[:, None], np.stack([around, np.abs(x)], axis=1), uv)
         elif kind == "skirt":
             names = ["front", "back"]
             reg = np.where(z > hzc, 0, 1)
-            uv = np.stack([x, y], axis=1)
         else:
             names = ["left_front", "left_back", "right_front", "right_back"]
             reg = np.where(x >= 0, 0, 2) + np.where(z > hzc, 0, 1)
-            uv = np.stack([x, y], axis=1)
-        return tuple(names), reg.astype(np.int32), uv
+        return tuple(names), reg.astype(np.int32), chart
 
     return field, keep, lo, hi, regions

@@ -12,6 +12,13 @@ from datagen.garment.materials import MATERIALS, material
 from datagen.garment.mesh import boundary_loops, load_garment
 from datagen.garment.types import GARMENT_TYPES, garment_params, make_garment
 
+LOOP_NAMES = {
+    "tshirt": "neck hem left_cuff right_cuff", "long_sleeve_shirt": "neck hem left_cuff right_cuff",
+    "tank_top": "neck hem left_armhole right_armhole", "dress": "neck hem left_armhole right_armhole",
+    "jacket": "neck_front_hem left_cuff right_cuff", "coat": "neck_front_hem left_cuff right_cuff",
+    "skirt": "waist hem", "pants": "waist left_hem right_hem", "shorts": "waist left_hem right_hem",
+}
+
 
 @pytest.fixture(scope="module")
 def garments(default_body):
@@ -28,9 +35,23 @@ def test_every_type_builds_and_passes_every_check(garments, default_body):
         assert c["outward_area_fraction"] > 0.95, kind
         assert c["edge_spread"] < 0.25 and c["angle_p1_deg"] > 25.0, kind
         assert len(g.loops) == GARMENT_TYPES[kind]["loops"] == g.metadata["boundary_loops"]
+        assert set(g.loops) == set(LOOP_NAMES[kind].split()), (kind, sorted(g.loops))
         assert g.vertex_region.shape == (g.vertex_count,) and g.uv.shape == (g.vertex_count, 2)
         assert g.seam_vertex.any() and not g.seam_vertex.all()
         assert g.metadata["type"] == kind and g.metadata["rest_area_m2"] > 0.2
+        # material frames: per-corner UVs in metres, not mirrored; weft horizontal on the trunk and
+        # legs and around the arm on sleeves; warp perpendicular to it in the face
+        fu = g.face_uv
+        uv_area = 0.5 * ((fu[:, 1, 0] - fu[:, 0, 0]) * (fu[:, 2, 1] - fu[:, 0, 1])
+                         - (fu[:, 2, 0] - fu[:, 0, 0]) * (fu[:, 1, 1] - fu[:, 0, 1]))
+        tri = g.vertices[g.faces]
+        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        assert np.mean(uv_area > 0) > 0.98 and 0.9 < np.median(uv_area / area) < 1.1, kind
+        weft, warp = g.material_frames().transpose(1, 0, 2)
+        sleeve = np.isin(g.face_region, [i for i, n in enumerate(g.region_names) if n.endswith("sleeve")])
+        assert np.mean(np.abs(weft[~sleeve, 1]) < 0.05) > 0.97, kind
+        assert np.mean(np.abs(weft[sleeve, 0]) < 0.05) > 0.97 if sleeve.any() else True, kind
+        np.testing.assert_allclose(np.einsum("ij,ij->i", weft, warp), 0.0, atol=1e-9)
 
 
 @pytest.mark.parametrize("body,kinds", [("fat", ("pants", "dress", "jacket")), ("thin", ("tshirt", "skirt", "coat"))])
@@ -43,6 +64,14 @@ def test_other_bodies(default_body, body, kinds):
         g = make_garment(kind, default_body, betas, seed=11)
         c = check_garment(g, verts, default_body.faces)
         assert c["ok"], (body, kind, c["failures"])
+
+
+def test_long_top_on_thin_body_keeps_one_hem(default_body):
+    from datagen.body.shapes import resolve_betas
+
+    # on the thin body a hem 12 cm below the hip joints is below the crotch: the hem is kept above it
+    g = make_garment("tank_top", default_body, resolve_betas(default_body, body="thin")[0], seed=9, params={"hem": 0.12})
+    assert set(g.loops) == set(LOOP_NAMES["tank_top"].split())
 
 
 def test_deterministic_and_seeded(garments, default_body):
@@ -89,6 +118,7 @@ def test_npz_round_trip_and_obj(garments, tmp_path):
     back = load_garment(g.save(tmp_path / "pants.npz"))
     np.testing.assert_array_equal(back.vertices, g.vertices)
     np.testing.assert_array_equal(back.vertex_region, g.vertex_region)
+    np.testing.assert_array_equal(back.face_uv, g.face_uv)
     assert back.region_names == g.region_names and back.material == g.material
     assert set(back.loops) == set(g.loops) and back.metadata["type"] == "pants"
     import trimesh
