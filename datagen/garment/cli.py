@@ -62,14 +62,14 @@ def _cmd_make(args) -> int:
     from datagen.body.shapes import resolve_betas
     from datagen.garment.checks import check_garment
     from datagen.garment.types import make_garment
-    from datagen.motion.cli import _parse_params
+    from datagen.params import parse_param_args
 
     out = Path(args.out)
     if out.suffix.lower() not in (".obj", ".ply", ".npz"):
         raise InputError(f"--out {out}: write .obj, .ply or .npz")
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
-    garment = make_garment(args.type, model, betas, seed=args.seed, params=_parse_params(args.param),
+    garment = make_garment(args.type, model, betas, seed=args.seed, params=parse_param_args(args.param),
                            target_edge_length=args.edge_length, material_name=args.material)
     c = check_garment(garment, np.asarray(model.shaped(betas))[0], model.faces)
     garment.save(out)

@@ -185,10 +185,10 @@ def _name_loops(v: np.ndarray, loops: list[np.ndarray], kind: str | None = None)
     if not loops:
         return {}
     centres = np.array([v[lp].mean(0) for lp in loops])
-    known = kind in _SIDE_OPENING or kind == "skirt"
+    known = kind in _SIDE_OPENING or kind in ("skirt", "flared_skirt")
     side_word = _SIDE_OPENING.get(kind or "")
     side_limit = 0.06 if side_word else 0.12
-    top_word = "waist" if kind in ("skirt", "pants", "shorts") else "neck"
+    top_word = "waist" if kind in ("skirt", "flared_skirt", "pants", "shorts") else "neck"
     out: dict[str, np.ndarray] = {}
     mid = [i for i in range(len(loops)) if abs(centres[i, 0]) <= side_limit]
     for i in sorted(range(len(loops)), key=lambda i: -abs(centres[i, 0])):

@@ -19,6 +19,7 @@ from datagen.errors import InputError
 from datagen.garment import levelset
 from datagen.garment.materials import Material, material
 from datagen.garment.mesh import GarmentMesh
+from datagen.params import ParamSpec, draw_params
 
 __all__ = ["GARMENT_TYPES", "MAX_VERTICES", "MIN_CLEARANCE", "ParamSpec", "garment_params", "make_garment"]
 
@@ -31,13 +32,6 @@ MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
 BUILDER_VERSION = 1
-
-
-@dataclass(frozen=True)
-class ParamSpec:
-    low: float
-    high: float
-    doc: str
 
 
 _TOP = {
@@ -56,6 +50,9 @@ _SLEEVE = {
 _SKIRT = {
     "flare": ParamSpec(0.0, 0.35, "widening of the skirt per metre below the hips"),
 }
+
+SKIRTS = ("skirt", "flared_skirt")
+"""Types that are a skirt alone: a waist and a hem opening, front and back panels."""
 
 GARMENT_TYPES: dict[str, dict] = {
     "tshirt": {"params": {**_TOP, **_SLEEVE}, "material": "jersey", "loops": 4, "edge": 0.018},
@@ -87,8 +84,15 @@ GARMENT_TYPES: dict[str, dict] = {
     "skirt": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
                          "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
-                         "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"), **_SKIRT},
+                         "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"),
+                         "flare": ParamSpec(0.0, 0.06, "widening per metre below the hips (straight cut)")},
               "material": "cotton", "loops": 2, "edge": 0.013},
+    "flared_skirt": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
+                                "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
+                                "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                                "hem": ParamSpec(0.2, 0.4, "hem below the hip joints (m)"),
+                                "flare": ParamSpec(0.3, 0.7, "widening per metre below the hips (A-line to circle)")},
+                     "material": "silk", "loops": 2, "edge": 0.015},
     "pants": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
                          "leg_ease": ParamSpec(0.015, 0.04, "clearance around the thigh (m)"),
@@ -113,18 +117,8 @@ def garment_params(kind: str, seed: int, overrides: dict | None = None) -> dict[
     """Style parameters of ``kind`` drawn by ``seed``, with ``overrides`` applied (range-checked)."""
     if kind not in GARMENT_TYPES:
         raise InputError(f"unknown garment type {kind!r}; types: {', '.join(GARMENT_TYPES)}")
-    specs = GARMENT_TYPES[kind]["params"]
-    rng = np.random.default_rng([int(seed), list(GARMENT_TYPES).index(kind), 104729])
-    params = {name: float(rng.uniform(s.low, s.high)) for name, s in specs.items()}
-    for name, value in (overrides or {}).items():
-        if name not in specs:
-            raise InputError(f"{kind!r} has no style parameter {name!r}; its parameters: {', '.join(specs)}")
-        s = specs[name]
-        if not (s.low <= float(value) <= s.high):
-            raise InputError(f"style parameter {name!r} of {kind!r} is {float(value):g}; allowed range is "
-                             f"[{s.low:g}, {s.high:g}] ({s.doc})")
-        params[name] = float(value)
-    return params
+    return draw_params(GARMENT_TYPES[kind]["params"], seed, (list(GARMENT_TYPES).index(kind), 104729), repr(kind),
+                       overrides)
 
 
 @dataclass
@@ -180,7 +174,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     verts = np.asarray(body_model.shaped(betas))[0]
     body = _Body(verts=verts, faces=np.asarray(body_model.faces), joints=np.asarray(body_model.rest_joints(betas))[0])
     area_guess = {"tshirt": 1.1, "long_sleeve_shirt": 1.3, "tank_top": 0.8, "jacket": 1.6, "coat": 2.4,
-                  "dress": 1.8, "skirt": 0.8, "pants": 1.5, "shorts": 0.8}[kind]
+                  "dress": 1.8, "skirt": 0.8, "flared_skirt": 1.0, "pants": 1.5, "shorts": 0.8}[kind]
     est_vertices = int(area_guess / (np.sqrt(3) / 4 * target_edge_length**2) / 2)
     if est_vertices > MAX_VERTICES:
         smallest = np.sqrt(area_guess / (2 * MAX_VERTICES * np.sqrt(3) / 4))
@@ -324,7 +318,7 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
         hem_y = ankle_y + p["hem"]
     else:
         hem_y = hip_y - p["hem"]
-    if kind == "skirt" and hem_y < knee_y - 0.12:
+    if kind in SKIRTS and hem_y < knee_y - 0.12:
         hem_y = knee_y - 0.12
     if top and not cone:
         # a top without a skirt part ends above the crotch: below it the clearance around the
@@ -394,7 +388,7 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
             arm = (np.abs(x) > sh[0] + 0.03) & (y > sh[1] - 0.12)
             if sleeve:
                 reg = np.where(arm & (x > 0), 2, np.where(arm & (x < 0), 3, reg))
-        elif kind == "skirt":
+        elif kind in SKIRTS:
             names = ["front", "back"]
             reg = np.where(z > hzc, 0, 1)
         else:

@@ -76,19 +76,6 @@ def register(sub, formatter) -> None:
     p.set_defaults(func=_cmd_export)
 
 
-def _parse_params(items: list[str]) -> dict[str, float]:
-    out = {}
-    for item in items:
-        name, sep, value = item.partition("=")
-        if not sep or not name:
-            raise InputError(f"--param {item!r}: write it as NAME=VALUE, e.g. --param tempo=1.1")
-        try:
-            out[name.strip()] = float(value)
-        except ValueError:
-            raise InputError(f"--param {item!r}: {value!r} is not a number") from None
-    return out
-
-
 def _cmd_list(args) -> int:
     from datagen.motion.labels import LABELS
     from datagen.motion.library import LABEL_PARAMS
@@ -111,9 +98,10 @@ def _cmd_list(args) -> int:
 
 def _cmd_make(args) -> int:
     from datagen.motion.library import make_motion
+    from datagen.params import parse_param_args
 
     t0 = time.perf_counter()
-    motion = make_motion(args.label, seed=args.seed, frames=args.frames, fps=args.fps, params=_parse_params(args.param))
+    motion = make_motion(args.label, seed=args.seed, frames=args.frames, fps=args.fps, params=parse_param_args(args.param))
     seconds = time.perf_counter() - t0
     out = Path(args.out)
     motion.save_npz(out)

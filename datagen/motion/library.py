@@ -25,6 +25,7 @@ from datagen.errors import InputError
 from datagen.motion.labels import LABELS, label_index
 from datagen.motion.motion import Motion
 from datagen.motion.procedural import (
+    J,
     PoseTrack,
     Rig,
     assemble,
@@ -38,6 +39,7 @@ from datagen.motion.procedural import (
     rot_z,
     smoothstep,
 )
+from datagen.params import ParamSpec, draw_params
 
 __all__ = ["GENERATOR_VERSION", "LABEL_PARAMS", "ParamSpec", "default_rig", "make_motion", "style_params"]
 
@@ -47,15 +49,6 @@ GENERATOR_VERSION = 1
 """Bumped whenever a generator changes what a (label, seed) gives."""
 
 DEG = np.pi / 180.0
-
-
-@dataclass(frozen=True)
-class ParamSpec:
-    """A style parameter: its range [low, high] (drawn uniformly by the seed) and meaning."""
-
-    low: float
-    high: float
-    doc: str
 
 
 _COMMON: dict[str, ParamSpec] = {
@@ -103,21 +96,8 @@ LABEL_PARAMS: dict[str, dict[str, ParamSpec]] = {name: {**_COMMON, **_EXTRA.get(
 
 def style_params(label: str, seed: int, overrides: dict | None = None) -> dict[str, float]:
     """The style parameters of ``label`` drawn by ``seed``, with ``overrides`` applied (checked)."""
-    label_index(label)
-    specs = LABEL_PARAMS[label]
-    rng = np.random.default_rng([int(seed), LABELS.index(label), 7919])
-    params = {name: float(rng.uniform(s.low, s.high)) for name, s in specs.items()}
-    for name, value in (overrides or {}).items():
-        if name not in specs:
-            raise InputError(f"{label!r} has no style parameter {name!r}; its parameters are "
-                             f"{', '.join(specs)} (`drape motion list` shows their ranges)")
-        s = specs[name]
-        value = float(value)
-        if not (s.low <= value <= s.high):
-            raise InputError(f"style parameter {name!r} of {label!r} is {value:g}; allowed range is "
-                             f"[{s.low:g}, {s.high:g}] ({s.doc})")
-        params[name] = value
-    return params
+    return draw_params(LABEL_PARAMS[LABELS[label_index(label)]], seed, (LABELS.index(label), 7919), repr(label),
+                       overrides)
 
 
 _RIG_CACHE: dict[int, Rig] = {}
@@ -193,7 +173,7 @@ class _Ctx:
 
     def plant(self, side: str, offset_xz=(0.0, 0.0), yaw: float = 0.0, heading=None) -> None:
         """Plant a foot at its rest spot (stance-scaled), shifted by ``offset_xz`` (m), turned by ``yaw``."""
-        rest = self.rig.rest_joints[J_ANKLE[side]]
+        rest = self.rig.rest_joints[J[f"{side}_ankle"]]
         x = rest[0] * self.p["stance"] + offset_xz[0]
         z = rest[2] + offset_xz[1]
         target = np.tile([x, rest[1], z], (self.T, 1))
@@ -240,8 +220,6 @@ class _Ctx:
                                  @ rot_z(np.broadcast_to(roll, (n,))))
 
 
-J_ANKLE = {"left": 7, "right": 8}
-J_HIP = {"left": 1, "right": 2}
 
 
 def _hanging_arms(c: _Ctx, swing_l=0.0, swing_r=0.0, elbow=15 * DEG, lower=75 * DEG) -> None:
@@ -368,7 +346,7 @@ def _jump(c: _Ctx) -> None:
     lift = np.where(air, y + 0.02 - 0.06 * np.sin(np.pi * np.clip((u - takeoff) / a_air, 0, 1)), 0.0)
     lift = np.maximum(lift, 0.0)
     for side in ("left", "right"):
-        rest = c.rig.rest_joints[J_ANKLE[side]]
+        rest = c.rig.rest_joints[J[f"{side}_ankle"]]
         x = rest[0] * c.p["stance"]
         c.track.ankle_target[side] = np.stack([np.full(c.T, x), rest[1] + lift, rest[2] + feet_z], -1)
         yaw = 8 * DEG * (1 if side == "left" else -1)
@@ -446,9 +424,9 @@ def _kick(c: _Ctx) -> None:
     # straight), kept above the ground; IK then bends the real leg to reach it
     flex = p["height"] * DEG * p["amplitude"] * kick
     knee = 90 * DEG * kick**0.75 * (1 - 0.85 * snap)
-    hip = J_HIP[side]
-    thigh = c.rig.rest_joints[hip + 3] - c.rig.rest_joints[hip]
-    shin = c.rig.rest_joints[hip + 6] - c.rig.rest_joints[hip + 3]
+    hip, j_knee, j_ankle = J[f"{side}_hip"], J[f"{side}_knee"], J[f"{side}_ankle"]
+    thigh = c.rig.rest_joints[j_knee] - c.rig.rest_joints[hip]
+    shin = c.rig.rest_joints[j_ankle] - c.rig.rest_joints[j_knee]
     leg = rot_x(-flex) @ (thigh[None, :, None] + rot_x(knee) @ shin[None, :, None])
     hip_pos = c.track.pelvis_pos + c.track.pelvis_rot @ c.rig.offset(hip)
     target = hip_pos + (c.track.pelvis_rot @ leg)[..., 0]

@@ -16,7 +16,7 @@ LOOP_NAMES = {
     "tshirt": "neck hem left_cuff right_cuff", "long_sleeve_shirt": "neck hem left_cuff right_cuff",
     "tank_top": "neck hem left_armhole right_armhole", "dress": "neck hem left_armhole right_armhole",
     "jacket": "neck_front_hem left_cuff right_cuff", "coat": "neck_front_hem left_cuff right_cuff",
-    "skirt": "waist hem", "pants": "waist left_hem right_hem", "shorts": "waist left_hem right_hem",
+    "skirt": "waist hem", "flared_skirt": "waist hem", "pants": "waist left_hem right_hem", "shorts": "waist left_hem right_hem",
 }
 
 
@@ -26,7 +26,7 @@ def garments(default_body):
 
 
 def test_every_type_builds_and_passes_every_check(garments, default_body):
-    assert len(GARMENT_TYPES) >= 9
+    assert len(GARMENT_TYPES) >= 10
     for kind, g in garments.items():
         c = check_garment(g, default_body.v_template, default_body.faces)
         assert c["ok"], (kind, c["failures"])
