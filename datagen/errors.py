@@ -19,6 +19,10 @@ class InputError(DrapeError, ValueError):
     """An array or file given to drape that has the wrong shape, values or format."""
 
 
+class SimulationError(DrapeError, RuntimeError):
+    """A simulation that cannot go on (e.g. contact buffers that keep overflowing)."""
+
+
 class MissingDependencyError(DrapeError, ImportError):
     """An optional dependency that the requested feature needs is not installed."""
 

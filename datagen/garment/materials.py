@@ -55,7 +55,7 @@ class Material:
     bending: float
     friction: float
     thickness: float
-    damping: float = 0.01
+    damping: float = 0.002
 
     def as_dict(self) -> dict:
         return asdict(self)

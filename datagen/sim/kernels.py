@@ -1,0 +1,599 @@
+"""Warp kernels of the cloth solver (vertex block descent), as free functions.
+
+Every array is an explicit argument; :mod:`datagen.sim.solver` only arranges the launches. The
+kernels run unchanged on CPU and CUDA.
+
+Energies (per element, SI units; see ``docs/simulator.md``):
+
+- membrane: orthotropic St. Venant-Kirchhoff on each triangle in its material frame (weft u, warp
+  v): ``A [k_u/2 G_uu² + k_v/2 G_vv² + k_uv G_uu G_vv + 2 k_s G_uv²]`` with the Green strain
+  ``G = (FᵀF - I)/2``, stiffnesses in N/m, ``k_uv = ν sqrt(k_u k_v)``;
+- bending: discrete shells (Grinspun et al. 2003) on each interior edge,
+  ``k_b/2 · 3|ē|²/(Ā₁+Ā₂) · (θ - θ̄)²`` with the rest angle θ̄ of the rest shape, k_b in N·m;
+- inertia ``m/(2h²)|x - y|²`` with ``y = x₀ + h v₀ + h² (g - c_air v₀ / ρ)``;
+- Rayleigh damping of the membrane and bending: ``(k_d/h) H_e (x - x₀)``;
+- contacts: ``k_c/2 (r - d)²`` for a distance d below the radius r, against the body (one
+  closest-point plane per vertex) and the cloth itself (vertex-triangle and edge-edge pairs),
+  with lagged Coulomb friction ``μ λ_n`` on the tangential displacement (smoothed below
+  ``ε_v h``).
+
+Each vertex takes one Newton step on its local energy per colour sweep (Chen et al. 2024,
+"Vertex Block Descent", SIGGRAPH), with Gauss-Seidel order across colours. Within a colour every
+vertex reads the positions of the start of the sweep (a Jacobi step for the contacts that couple
+same-coloured vertices), so the result does not depend on the order of threads. Every vertex's
+move in a substep is bounded by 0.4x its distance to the nearest cloth primitive found at
+detection (Chen et al. 2024, §3.6 conservative bounds) when that primitive is within the search
+distance, so the cloth cannot pass through itself unless two primitives farther apart than the
+search distance close it in one substep (a relative speed above 0.6 x search distance / substep;
+1.8 m/s at the defaults).
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+BIG = 1.0e9
+
+
+@wp.func
+def triangle_closest_bary(p: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> wp.vec3:
+    """Barycentric weights of the point of triangle abc closest to p (Ericson, RTCD 5.1.5)."""
+    ab = b - a
+    ac = c - a
+    ap = p - a
+    d1 = wp.dot(ab, ap)
+    d2 = wp.dot(ac, ap)
+    if d1 <= 0.0 and d2 <= 0.0:
+        return wp.vec3(1.0, 0.0, 0.0)
+    bp = p - b
+    d3 = wp.dot(ab, bp)
+    d4 = wp.dot(ac, bp)
+    if d3 >= 0.0 and d4 <= d3:
+        return wp.vec3(0.0, 1.0, 0.0)
+    vc = d1 * d4 - d3 * d2
+    if vc <= 0.0 and d1 >= 0.0 and d3 <= 0.0:
+        v = d1 / (d1 - d3)
+        return wp.vec3(1.0 - v, v, 0.0)
+    cp = p - c
+    d5 = wp.dot(ab, cp)
+    d6 = wp.dot(ac, cp)
+    if d6 >= 0.0 and d5 <= d6:
+        return wp.vec3(0.0, 0.0, 1.0)
+    vb = d5 * d2 - d1 * d6
+    if vb <= 0.0 and d2 >= 0.0 and d6 <= 0.0:
+        w = d2 / (d2 - d6)
+        return wp.vec3(1.0 - w, 0.0, w)
+    va = d3 * d6 - d5 * d4
+    if va <= 0.0 and (d4 - d3) >= 0.0 and (d5 - d6) >= 0.0:
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6))
+        return wp.vec3(0.0, 1.0 - w, w)
+    denom = 1.0 / (va + vb + vc)
+    v = vb * denom
+    w = vc * denom
+    return wp.vec3(1.0 - v - w, v, w)
+
+
+@wp.func
+def are_neighbours(a: int, b: int, nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32)) -> bool:
+    """True when a == b or a and b share a mesh edge (sorted neighbour lists)."""
+    if a == b:
+        return True
+    for k in range(nbr_offsets[a], nbr_offsets[a + 1]):
+        if nbr[k] == b:
+            return True
+    return False
+
+
+@wp.func
+def contact_force_hessian(dx_rel: wp.vec3, n: wp.vec3, depth: float, k: float, mu: float, eps_u: float,
+                          weight: float):
+    """Force and Hessian on one vertex of a penalty contact ``k/2 depth²`` along n with lagged
+    Coulomb friction; ``weight`` is the vertex's share (barycentric weight, signed)."""
+    lam = k * depth
+    f = n * (lam * weight)
+    h = wp.outer(n, n) * (k * weight * weight)
+    if mu > 0.0:
+        t = dx_rel - n * wp.dot(n, dx_rel)
+        ut = wp.length(t)
+        scale = mu * lam * wp.abs(weight) / wp.max(ut, eps_u)
+        f = f - t * scale
+        h = h + (wp.identity(n=3, dtype=float) - wp.outer(n, n)) * scale
+    return f, h
+
+
+@wp.kernel
+def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
+                 area: wp.array(dtype=float), active: wp.array(dtype=wp.int32), gravity: wp.vec3, air_drag: float,
+                 h: float, x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtype=wp.vec3),
+                 pinned_target: wp.array(dtype=wp.vec3)):
+    """Save x₀, form the inertial target y; pinned vertices move to their target."""
+    i = wp.tid()
+    x_prev[i] = x[i]
+    if active[i] == 0:
+        inertia_target[i] = pinned_target[i]
+        return
+    a = gravity
+    if mass[i] > 0.0:
+        a = a - v[i] * (air_drag * area[i] / mass[i])
+    inertia_target[i] = x[i] + v[i] * h + a * (h * h)
+
+
+@wp.kernel
+def initial_guess(x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtype=wp.vec3),
+                  bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
+    """Start the iterations at y, clipped to each vertex's conservative bound."""
+    i = wp.tid()
+    if active[i] == 0:
+        x[i] = inertia_target[i]
+        return
+    d = inertia_target[i] - x_prev[i]
+    L = wp.length(d)
+    if L > bound[i]:
+        d = d * (bound[i] / L)
+    x[i] = x_prev[i] + d
+
+
+@wp.kernel
+def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), h: float,
+                    v: wp.array(dtype=wp.vec3)):
+    i = wp.tid()
+    v[i] = (x[i] - x_prev[i]) / h
+
+
+@wp.kernel
+def interpolate_body(b0: wp.array(dtype=wp.vec3), b1: wp.array(dtype=wp.vec3), alpha: float,
+                     offset: wp.array(dtype=wp.vec3), vert_scene: wp.array(dtype=wp.int32),
+                     out: wp.array(dtype=wp.vec3), out_shifted: wp.array(dtype=wp.vec3)):
+    """Body vertices at ``alpha`` within the frame; the shifted copy is what the BVH sees."""
+    i = wp.tid()
+    p = b0[i] * (1.0 - alpha) + b1[i] * alpha
+    out[i] = p
+    out_shifted[i] = p + offset[vert_scene[i]]
+
+
+@wp.kernel
+def shift_points(x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
+                 out: wp.array(dtype=wp.vec3)):
+    i = wp.tid()
+    out[i] = x[i] + offset[scene[i]]
+
+
+@wp.kernel
+def edge_bounds(x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
+                edges: wp.array2d(dtype=wp.int32), pad: float, lower: wp.array(dtype=wp.vec3),
+                upper: wp.array(dtype=wp.vec3)):
+    e = wp.tid()
+    a = x[edges[e, 0]] + offset[scene[edges[e, 0]]]
+    b = x[edges[e, 1]] + offset[scene[edges[e, 0]]]
+    lower[e] = wp.min(a, b) - wp.vec3(pad)
+    upper[e] = wp.max(a, b) + wp.vec3(pad)
+
+
+@wp.kernel
+def detect_body(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+                scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
+                body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
+                has: wp.array(dtype=wp.int32), point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
+                body_disp: wp.array(dtype=wp.vec3)):
+    """Closest point of the body (this substep's pose) within ``query`` of each cloth vertex: a
+    contact plane (point, outward face normal) and the body's displacement there in the substep."""
+    i = wp.tid()
+    has[i] = 0
+    q = wp.mesh_query_point_no_sign(body_mesh, x[i] + offset[scene[i]], query)
+    if not q.result:
+        return
+    f = q.face
+    a = body_faces[f, 0]
+    b = body_faces[f, 1]
+    c = body_faces[f, 2]
+    w0 = q.u
+    w1 = q.v
+    w2 = 1.0 - q.u - q.v
+    p = body_now[a] * w0 + body_now[b] * w1 + body_now[c] * w2
+    n = wp.cross(body_now[b] - body_now[a], body_now[c] - body_now[a])
+    ln = wp.length(n)
+    if ln < 1.0e-20:
+        return
+    has[i] = 1
+    point[i] = p
+    normal[i] = n / ln
+    body_disp[i] = p - (body_prev[a] * w0 + body_prev[b] * w1 + body_prev[c] * w2)
+
+
+@wp.kernel
+def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+                           scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32),
+                           nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
+                           query: float, contact_radius: float, active: wp.array(dtype=wp.int32),
+                           vt_count: wp.array(dtype=wp.int32), vt_tri: wp.array2d(dtype=wp.int32),
+                           tv_count: wp.array(dtype=wp.int32), tv_vert: wp.array2d(dtype=wp.int32),
+                           min_dist: wp.array(dtype=float)):
+    """Vertex-triangle pairs of the cloth closer than ``contact_radius`` (stored both ways), and
+    every vertex's distance to the nearest non-neighbouring triangle within ``query``."""
+    i = wp.tid()
+    p = x[i] + offset[scene[i]]
+    lo = p - wp.vec3(query)
+    hi = p + wp.vec3(query)
+    qry = wp.mesh_query_aabb(cloth_mesh, lo, hi)
+    t = int(0)
+    n = int(0)
+    cap = vt_tri.shape[1]
+    cap_t = tv_vert.shape[1]
+    while wp.mesh_query_aabb_next(qry, t):
+        a = faces[t, 0]
+        b = faces[t, 1]
+        c = faces[t, 2]
+        if scene[a] != scene[i]:
+            continue
+        if are_neighbours(i, a, nbr_offsets, nbr) or are_neighbours(i, b, nbr_offsets, nbr) or are_neighbours(
+                i, c, nbr_offsets, nbr):
+            continue
+        w = triangle_closest_bary(x[i], x[a], x[b], x[c])
+        d = wp.length(x[i] - (x[a] * w[0] + x[b] * w[1] + x[c] * w[2]))
+        if d > query:
+            continue
+        wp.atomic_min(min_dist, i, d)
+        wp.atomic_min(min_dist, a, d)
+        wp.atomic_min(min_dist, b, d)
+        wp.atomic_min(min_dist, c, d)
+        if d < contact_radius:
+            if n < cap:
+                vt_tri[i, n] = t
+            n += 1
+            k = wp.atomic_add(tv_count, t, 1)
+            if k < cap_t:
+                tv_vert[t, k] = i
+    vt_count[i] = n
+
+
+@wp.kernel
+def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+                     scene: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+                     nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32), query: float,
+                     contact_radius: float, ee_count: wp.array(dtype=wp.int32), ee_edge: wp.array2d(dtype=wp.int32),
+                     min_dist: wp.array(dtype=float)):
+    """Edge-edge pairs of the cloth closer than ``contact_radius`` (each edge stores its own)."""
+    e = wp.tid()
+    a = edges[e, 0]
+    b = edges[e, 1]
+    pa = x[a] + offset[scene[a]]
+    pb = x[b] + offset[scene[a]]
+    lo = wp.min(pa, pb) - wp.vec3(query)
+    hi = wp.max(pa, pb) + wp.vec3(query)
+    qry = wp.bvh_query_aabb(edge_bvh, lo, hi)
+    f = int(0)
+    n = int(0)
+    cap = ee_edge.shape[1]
+    while wp.bvh_query_next(qry, f):
+        if f == e:
+            continue
+        c = edges[f, 0]
+        d = edges[f, 1]
+        if scene[c] != scene[a]:
+            continue
+        if are_neighbours(a, c, nbr_offsets, nbr) or are_neighbours(a, d, nbr_offsets, nbr) or are_neighbours(
+                b, c, nbr_offsets, nbr) or are_neighbours(b, d, nbr_offsets, nbr):
+            continue
+        st = wp.closest_point_edge_edge(x[a], x[b], x[c], x[d], 1.0e-12)
+        dist = st[2]
+        if dist > query:
+            continue
+        wp.atomic_min(min_dist, a, dist)
+        wp.atomic_min(min_dist, b, dist)
+        if dist < contact_radius:
+            if n < cap:
+                ee_edge[e, n] = f
+            n += 1
+    ee_count[e] = n
+
+
+@wp.kernel
+def sort_lists(count: wp.array(dtype=wp.int32), items: wp.array2d(dtype=wp.int32)):
+    """Sort each row's first ``count`` entries (insertion sort: rows are short), so contact sums
+    do not depend on the order in which threads appended."""
+    r = wp.tid()
+    n = wp.min(count[r], items.shape[1])
+    for k in range(1, n):
+        key = items[r, k]
+        j = k - 1
+        while j >= 0 and items[r, j] > key:
+            items[r, j + 1] = items[r, j]
+            j -= 1
+        items[r, j + 1] = key
+
+
+@wp.kernel
+def finish_bounds(min_dist: wp.array(dtype=float), fraction: float, bound: wp.array(dtype=float)):
+    """A vertex with a non-neighbouring cloth primitive within the search distance moves at most
+    ``fraction`` of that distance this substep (then no two such primitives can meet)."""
+    i = wp.tid()
+    bound[i] = fraction * min_dist[i]
+
+
+@wp.func
+def membrane_force_hessian(i: int, local: int, f: int, x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
+                           faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
+                           tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4), damping: float,
+                           h: float):
+    """Force and Hessian block on corner ``local`` of face ``f`` (orthotropic StVK, see module doc)."""
+    x0 = x[faces[f, 0]]
+    x1 = x[faces[f, 1]]
+    x2 = x[faces[f, 2]]
+    D = dm_inv[f]
+    # F = sum_j x_j c_jᵀ with c_1 = row 0 of Dm⁻¹, c_2 = row 1, c_0 = -(c_1 + c_2)
+    f0 = (x1 - x0) * D[0, 0] + (x2 - x0) * D[1, 0]
+    f1 = (x1 - x0) * D[0, 1] + (x2 - x0) * D[1, 1]
+    c = wp.vec2(-(D[0, 0] + D[1, 0]), -(D[0, 1] + D[1, 1]))
+    if local == 1:
+        c = wp.vec2(D[0, 0], D[0, 1])
+    elif local == 2:
+        c = wp.vec2(D[1, 0], D[1, 1])
+    k = tri_stiff[f]
+    ku = k[0]
+    kv = k[1]
+    kuv = k[2]
+    ks = k[3]
+    g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
+    g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
+    g01 = 0.5 * wp.dot(f0, f1)
+    s00 = ku * g00 + kuv * g11
+    s11 = kv * g11 + kuv * g00
+    s01 = 2.0 * ks * g01
+    A = tri_area[f]
+    sc0 = s00 * c[0] + s01 * c[1]
+    sc1 = s01 * c[0] + s11 * c[1]
+    force = -(f0 * sc0 + f1 * sc1) * A
+    m00 = ku * c[0] * c[0] + ks * c[1] * c[1]
+    m11 = ks * c[0] * c[0] + kv * c[1] * c[1]
+    m01 = (kuv + ks) * c[0] * c[1]
+    hess = (wp.outer(f0, f0) * m00 + wp.outer(f1, f1) * m11 + (wp.outer(f0, f1) + wp.outer(f1, f0)) * m01) * A
+    if damping > 0.0:
+        # Rayleigh damping: the material tangent applied to the strain rate of the whole triangle
+        # over the substep (zero for rigid motions)
+        u0 = x0 - x_prev[faces[f, 0]]
+        u1 = x1 - x_prev[faces[f, 1]]
+        u2 = x2 - x_prev[faces[f, 2]]
+        d0 = (u1 - u0) * D[0, 0] + (u2 - u0) * D[1, 0]
+        d1 = (u1 - u0) * D[0, 1] + (u2 - u0) * D[1, 1]
+        r00 = wp.dot(f0, d0)
+        r11 = wp.dot(f1, d1)
+        r01 = 0.5 * (wp.dot(f0, d1) + wp.dot(f1, d0))
+        t00 = ku * r00 + kuv * r11
+        t11 = kv * r11 + kuv * r00
+        t01 = 2.0 * ks * r01
+        scale = damping / h
+        force = force - (f0 * (t00 * c[0] + t01 * c[1]) + f1 * (t01 * c[0] + t11 * c[1]) + d0 * sc0 + d1 * sc1) * (
+            A * scale)
+        hess = hess * (1.0 + scale)
+    geo = c[0] * sc0 + c[1] * sc1
+    if geo > 0.0:
+        hess = hess + wp.identity(n=3, dtype=float) * (geo * A)
+    return force, hess
+
+
+@wp.func
+def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
+                          edges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float),
+                          bend_k: wp.array(dtype=float), damping: float, h: float):
+    """Force and Gauss-Newton Hessian on stencil vertex ``local`` (0, 1: the hinge; 2, 3: the
+    opposite corners) of the discrete-shells bending energy of edge ``e``."""
+    x0 = x[edges[e, 0]]
+    x1 = x[edges[e, 1]]
+    x2 = x[edges[e, 2]]
+    x3 = x[edges[e, 3]]
+    E = x1 - x0
+    L = wp.length(E)
+    N1 = wp.cross(E, x2 - x0)
+    N2 = wp.cross(x3 - x0, E)
+    n1sq = wp.dot(N1, N1)
+    n2sq = wp.dot(N2, N2)
+    zero = wp.mat33(0.0)
+    if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
+        return wp.vec3(0.0), zero
+    Eh = E / L
+    n1 = N1 / wp.sqrt(n1sq)
+    n2 = N2 / wp.sqrt(n2sq)
+    theta = wp.atan2(wp.dot(wp.cross(n1, n2), Eh), wp.dot(n1, n2))
+    a = N1 / n1sq
+    b = N2 / n2sq
+    # dθ/dx of the stencil vertex (Bridson et al. 2003, signs for this θ)
+    g = wp.vec3(0.0)
+    if local == 0:
+        g = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
+    elif local == 1:
+        g = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
+    elif local == 2:
+        g = -a * L
+    else:
+        g = -b * L
+    k = bend_k[e]
+    dtheta = theta - rest_angle[e]
+    force = -g * (k * dtheta)
+    hess = wp.outer(g, g) * k
+    if damping > 0.0:
+        # Rayleigh damping on the rate of the angle (all four stencil vertices)
+        g0 = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
+        g1 = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
+        rate = (wp.dot(g0, x0 - x_prev[edges[e, 0]]) + wp.dot(g1, x1 - x_prev[edges[e, 1]])
+                - wp.dot(a * L, x2 - x_prev[edges[e, 2]]) - wp.dot(b * L, x3 - x_prev[edges[e, 3]]))
+        force = force - g * (k * rate * damping / h)
+        hess = hess * (1.0 + damping / h)
+    return force, hess
+
+
+@wp.kernel
+def solve_colour(
+    colour_verts: wp.array(dtype=wp.int32),
+    x: wp.array(dtype=wp.vec3),
+    x_prev: wp.array(dtype=wp.vec3),
+    inertia_target: wp.array(dtype=wp.vec3),
+    mass: wp.array(dtype=float),
+    active: wp.array(dtype=wp.int32),
+    bound: wp.array(dtype=float),
+    damping: wp.array(dtype=float),
+    friction: wp.array(dtype=float),
+    faces: wp.array2d(dtype=wp.int32),
+    dm_inv: wp.array(dtype=wp.mat22),
+    tri_area: wp.array(dtype=float),
+    tri_stiff: wp.array(dtype=wp.vec4),
+    edges: wp.array2d(dtype=wp.int32),
+    rest_angle: wp.array(dtype=float),
+    bend_k: wp.array(dtype=float),
+    v2f_offsets: wp.array(dtype=wp.int32),
+    v2f: wp.array2d(dtype=wp.int32),
+    v2e_offsets: wp.array(dtype=wp.int32),
+    v2e: wp.array2d(dtype=wp.int32),
+    body_has: wp.array(dtype=wp.int32),
+    body_point: wp.array(dtype=wp.vec3),
+    body_normal: wp.array(dtype=wp.vec3),
+    body_disp: wp.array(dtype=wp.vec3),
+    body_radius: wp.array(dtype=float),
+    body_k: float,
+    vt_count: wp.array(dtype=wp.int32),
+    vt_tri: wp.array2d(dtype=wp.int32),
+    tv_count: wp.array(dtype=wp.int32),
+    tv_vert: wp.array2d(dtype=wp.int32),
+    ee_count: wp.array(dtype=wp.int32),
+    ee_edge: wp.array2d(dtype=wp.int32),
+    self_radius: float,
+    self_k: float,
+    self_friction: float,
+    eps_u: float,
+    h: float,
+    x_out: wp.array(dtype=wp.vec3),
+):
+    """One Newton step on the local energy of every vertex of one colour (writes ``x_out``)."""
+    tid = wp.tid()
+    i = colour_verts[tid]
+    xi = x[i]
+    if active[i] == 0:
+        x_out[i] = xi
+        return
+    m_h2 = mass[i] / (h * h)
+    force = (inertia_target[i] - xi) * m_h2
+    hess = wp.identity(n=3, dtype=float) * m_h2
+    kd = damping[i]
+    # membrane
+    for k in range(v2f_offsets[i], v2f_offsets[i + 1]):
+        fm, hm = membrane_force_hessian(i, v2f[k, 1], v2f[k, 0], x, x_prev, faces, dm_inv, tri_area, tri_stiff, kd,
+                                        h)
+        force += fm
+        hess += hm
+    # bending (every edge stencil the vertex belongs to) and edge-edge contacts
+    for k in range(v2e_offsets[i], v2e_offsets[i + 1]):
+        e = v2e[k, 0]
+        local = v2e[k, 1]
+        if edges[e, 2] >= 0 and edges[e, 3] >= 0:
+            fb, hb = bending_force_hessian(i, local, e, x, x_prev, edges, rest_angle, bend_k, kd, h)
+            force += fb
+            hess += hb
+        if local < 2:
+            a = edges[e, 0]
+            b = edges[e, 1]
+            for kk in range(wp.min(ee_count[e], ee_edge.shape[1])):
+                f = ee_edge[e, kk]
+                c = edges[f, 0]
+                d = edges[f, 1]
+                st = wp.closest_point_edge_edge(x[a], x[b], x[c], x[d], 1.0e-12)
+                es = st[0]
+                et = st[1]
+                pa = x[a] * (1.0 - es) + x[b] * es
+                pb = x[c] * (1.0 - et) + x[d] * et
+                dist = wp.length(pa - pb)
+                if dist < self_radius and dist > 1.0e-9:
+                    n = (pa - pb) / dist
+                    we = 1.0 - es
+                    if local == 1:
+                        we = es
+                    rel = ((x[a] - x_prev[a]) * (1.0 - es) + (x[b] - x_prev[b]) * es) - (
+                        (x[c] - x_prev[c]) * (1.0 - et) + (x[d] - x_prev[d]) * et)
+                    fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, we)
+                    force += fc
+                    hess += hc
+    # vertex-triangle contacts with i as the vertex
+    for kk in range(wp.min(vt_count[i], vt_tri.shape[1])):
+        t = vt_tri[i, kk]
+        a = faces[t, 0]
+        b = faces[t, 1]
+        c = faces[t, 2]
+        w = triangle_closest_bary(xi, x[a], x[b], x[c])
+        p = x[a] * w[0] + x[b] * w[1] + x[c] * w[2]
+        dist = wp.length(xi - p)
+        if dist < self_radius and dist > 1.0e-9:
+            n = (xi - p) / dist
+            rel = (xi - x_prev[i]) - ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2])
+            fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, 1.0)
+            force += fc
+            hess += hc
+    # vertex-triangle contacts with i as a corner of the triangle
+    for k in range(v2f_offsets[i], v2f_offsets[i + 1]):
+        t = v2f[k, 0]
+        local = v2f[k, 1]
+        a = faces[t, 0]
+        b = faces[t, 1]
+        c = faces[t, 2]
+        for kk in range(wp.min(tv_count[t], tv_vert.shape[1])):
+            j = tv_vert[t, kk]
+            w = triangle_closest_bary(x[j], x[a], x[b], x[c])
+            p = x[a] * w[0] + x[b] * w[1] + x[c] * w[2]
+            dist = wp.length(x[j] - p)
+            if dist < self_radius and dist > 1.0e-9:
+                n = (p - x[j]) / dist
+                rel = ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2]) - (
+                    x[j] - x_prev[j])
+                fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local])
+                force += fc
+                hess += hc
+    # the body
+    if body_has[i] == 1:
+        n = body_normal[i]
+        dist = wp.dot(xi - body_point[i], n)
+        r = body_radius[i]
+        if dist < r:
+            rel = (xi - x_prev[i]) - body_disp[i]
+            fc, hc = contact_force_hessian(rel, n, r - dist, body_k, friction[i], eps_u, 1.0)
+            force += fc
+            hess += hc
+    if wp.abs(wp.determinant(hess)) < 1.0e-20:
+        x_out[i] = xi
+        return
+    dx = wp.inverse(hess) * force
+    new = xi + dx
+    move = new - x_prev[i]
+    L = wp.length(move)
+    if L > bound[i]:
+        new = x_prev[i] + move * (bound[i] / L)
+    x_out[i] = new
+
+
+@wp.kernel
+def copy_colour(colour_verts: wp.array(dtype=wp.int32), src: wp.array(dtype=wp.vec3), dst: wp.array(dtype=wp.vec3)):
+    tid = wp.tid()
+    i = colour_verts[tid]
+    dst[i] = src[i]
+
+
+@wp.kernel
+def count_needed(count: wp.array(dtype=wp.int32), needed: wp.array(dtype=wp.int32), slot: int):
+    """The largest list length asked for (to grow the contact buffers when it exceeds them)."""
+    i = wp.tid()
+    wp.atomic_max(needed, slot, count[i])
+
+
+@wp.kernel
+def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2: wp.array(dtype=wp.vec3),
+              x_prev: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
+              omega: float):
+    """Chebyshev semi-iterative acceleration of the sweeps (Wang 2015; VBD §3.5), bounded like the
+    sweeps themselves; keeps the last two iterates."""
+    i = wp.tid()
+    xi = x[i]
+    if active[i] != 0 and omega != 1.0:
+        xi = x_nm2[i] + (xi - x_nm2[i]) * omega
+        move = xi - x_prev[i]
+        L = wp.length(move)
+        if L > bound[i]:
+            xi = x_prev[i] + move * (bound[i] / L)
+        x[i] = xi
+    x_nm2[i] = x_nm1[i]
+    x_nm1[i] = xi

@@ -1,0 +1,211 @@
+"""The vertex block descent cloth solver: arranges the launches of :mod:`datagen.sim.kernels`.
+
+``SolverVBD(model, config).step(state_in, state_out, control, dt)`` advances every scene of the
+model by ``dt`` (one frame) in ``config.substeps`` substeps of ``config.iterations`` colour sweeps,
+with the body moving linearly from the previous control to ``control`` within the frame.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from datagen.errors import InputError, SimulationError
+
+
+@dataclass(frozen=True, kw_only=True)
+class SolverConfig:
+    """Solver settings (SI units).
+
+    Attributes:
+        substeps: substeps per step (frame).
+        iterations: colour sweeps per substep.
+        gravity: gravitational acceleration [m/s²], Y up.
+        air_drag: linear air drag per area [kg/(m² s)].
+        body_stiffness: body contact stiffness k_c [N/m].
+        body_margin: extra body contact distance beyond the material thickness [m].
+        body_query: body contact search distance [m].
+        self_collision: vertex-triangle and edge-edge contacts of the cloth with itself.
+        self_radius: cloth-cloth contact distance [m].
+        self_stiffness: cloth-cloth contact stiffness [N/m].
+        self_friction: cloth-cloth Coulomb friction coefficient.
+        self_query: cloth-cloth search distance [m]: a vertex with a non-neighbouring cloth
+            primitive closer than this moves at most 0.4x that distance per substep.
+        friction_velocity: velocity below which friction is smoothed (static) [m/s].
+        contact_capacity: initial contacts stored per vertex, triangle and edge (grows on demand).
+        chebyshev_rho: spectral radius estimate for Chebyshev acceleration of the sweeps (0: off).
+    """
+
+    substeps: int = 10
+    iterations: int = 10
+    gravity: tuple[float, float, float] = (0.0, -9.81, 0.0)
+    air_drag: float = 0.02
+    body_stiffness: float = 1.0e4
+    body_margin: float = 0.002
+    body_query: float = 0.03
+    self_collision: bool = True
+    self_radius: float = 0.004
+    self_stiffness: float = 2.0e3
+    self_friction: float = 0.2
+    self_query: float = 0.01
+    friction_velocity: float = 1.0e-3
+    contact_capacity: int = 16
+    chebyshev_rho: float = 0.9
+
+    def __post_init__(self):
+        for name in ("substeps", "iterations"):
+            if int(getattr(self, name)) < 1:
+                raise InputError(f"solver {name} must be >= 1, got {getattr(self, name)}")
+        for name in ("body_stiffness", "body_query", "self_radius", "self_stiffness", "self_query",
+                     "friction_velocity"):
+            if not float(getattr(self, name)) > 0:
+                raise InputError(f"solver {name} must be > 0, got {getattr(self, name)}")
+        if self.self_query <= self.self_radius:
+            raise InputError(f"self_query ({self.self_query}) must exceed self_radius ({self.self_radius})")
+
+
+class SolverVBD:
+    """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
+
+    def __init__(self, model, config: SolverConfig | None = None):
+        import warp as wp
+
+        from datagen.sim import kernels as K
+
+        self.model = model
+        self.config = config or SolverConfig()
+        self.K = K
+        m = model
+        n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
+        with wp.ScopedDevice(m.device):
+            z3 = lambda k: wp.zeros(k, dtype=wp.vec3)  # noqa: E731
+            self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
+            self.x_nm1, self.x_nm2 = z3(n), z3(n)
+            self.bound = wp.zeros(n, dtype=float)
+            self.min_dist = wp.zeros(n, dtype=float)
+            self.body_has = wp.zeros(n, dtype=wp.int32)
+            self.body_point, self.body_normal, self.body_disp = z3(n), z3(n), z3(n)
+            self.body_radius = wp.array(m.host["thickness"].astype(np.float32) + self.config.body_margin, dtype=float)
+            self.body_start = wp.clone(m.body_rest)
+            self.body_prev_sub, self.body_sub, self.body_shifted = z3(nb), z3(nb), z3(nb)
+            wp.launch(K.interpolate_body, nb, inputs=[self.body_start, self.body_start, 0.0, m.scene_offset,
+                                                      m.body_vert_scene, self.body_sub, self.body_shifted])
+            self.body_mesh = wp.Mesh(points=self.body_shifted, indices=m.body_faces.flatten())
+            self.cloth_shifted = z3(n)
+            wp.launch(K.shift_points, n, inputs=[m.rest_positions, m.scene_offset, m.particle_scene,
+                                                 self.cloth_shifted])
+            self.cloth_mesh = wp.Mesh(points=self.cloth_shifted, indices=m.faces.flatten())
+            self.edge_lo, self.edge_hi = z3(ne), z3(ne)
+            wp.launch(K.edge_bounds, ne, inputs=[m.rest_positions, m.scene_offset, m.particle_scene, m.edge_pairs,
+                                                 0.0, self.edge_lo, self.edge_hi])
+            self.edge_bvh = wp.Bvh(self.edge_lo, self.edge_hi)
+            self.vt_count = wp.zeros(n, dtype=wp.int32)
+            self.tv_count = wp.zeros(nf, dtype=wp.int32)
+            self.ee_count = wp.zeros(ne, dtype=wp.int32)
+            self.needed = wp.zeros(3, dtype=wp.int32)
+        self._allocate_contacts(self.config.contact_capacity)
+        self.contact_growths = 0
+
+    def _allocate_contacts(self, cap: int) -> None:
+        import warp as wp
+
+        m = self.model
+        with wp.ScopedDevice(m.device):
+            self.capacity = int(cap)
+            self.vt_tri = wp.zeros((m.particle_count, cap), dtype=wp.int32)
+            self.tv_vert = wp.zeros((m.face_count, cap), dtype=wp.int32)
+            self.ee_edge = wp.zeros((m.edge_count, cap), dtype=wp.int32)
+
+    def reset_body(self, control) -> None:
+        """Take ``control`` as the body's pose at the start of the next step (no motion in between)."""
+        self.body_start.assign(control.body_vertices)
+
+    def step(self, state_in, state_out, control, dt: float) -> None:
+        """Advance by ``dt`` [s]; ``state_in`` is read, ``state_out`` written (they may be the same).
+
+        Contact buffers that overflow are grown and the step is redone, so no contact is dropped.
+        """
+        if not dt > 0:
+            raise InputError(f"time step must be > 0, got {dt}")
+        for _attempt in range(6):
+            if state_out is not state_in:
+                state_out.assign(state_in)
+            need = self._step(state_out, control, float(dt))
+            if need <= self.capacity:
+                self.body_start.assign(control.body_vertices)
+                return
+            self.contact_growths += 1
+            self._allocate_contacts(int(need * 1.5) + 1)
+            if state_out is state_in:
+                raise SimulationError("contact buffers overflowed in an in-place step; they have been grown: "
+                                      "step with separate input and output states")
+        raise SimulationError(f"contact buffers kept overflowing (last need {need} per element)")
+
+    def _step(self, state, control, dt: float) -> int:
+        import warp as wp
+
+        K, m, c = self.K, self.model, self.config
+        n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
+        h = dt / c.substeps
+        x, v = state.positions, state.velocities
+        self.needed.zero_()
+        with wp.ScopedDevice(m.device):
+            for s in range(c.substeps):
+                a1 = (s + 1) / c.substeps
+                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / c.substeps,
+                                                          m.scene_offset, m.body_vert_scene, self.body_prev_sub,
+                                                          self.body_shifted])
+                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1,
+                                                          m.scene_offset, m.body_vert_scene, self.body_sub,
+                                                          self.body_shifted])
+                self.body_mesh.refit()
+                wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
+                                                     c.air_drag, h, self.x_prev, self.y, state.pinned_target])
+                wp.launch(K.detect_body, n, inputs=[self.body_mesh.id, self.x_prev, m.scene_offset, m.particle_scene,
+                                                    m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
+                                                    self.body_has, self.body_point, self.body_normal, self.body_disp])
+                self.min_dist.fill_(K.BIG)
+                self.vt_count.zero_()
+                self.tv_count.zero_()
+                self.ee_count.zero_()
+                if c.self_collision:
+                    wp.launch(K.shift_points, n, inputs=[self.x_prev, m.scene_offset, m.particle_scene,
+                                                         self.cloth_shifted])
+                    self.cloth_mesh.refit()
+                    wp.launch(K.edge_bounds, ne, inputs=[self.x_prev, m.scene_offset, m.particle_scene, m.edge_pairs,
+                                                         0.0, self.edge_lo, self.edge_hi])
+                    self.edge_bvh.refit()
+                    wp.launch(K.detect_vertex_triangle, n,
+                              inputs=[self.cloth_mesh.id, self.x_prev, m.scene_offset, m.particle_scene, m.faces,
+                                      m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
+                                      self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
+                    wp.launch(K.detect_edge_edge, ne,
+                              inputs=[self.edge_bvh.id, self.x_prev, m.scene_offset, m.particle_scene, m.edge_pairs,
+                                      m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.ee_count,
+                                      self.ee_edge, self.min_dist])
+                    wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
+                    wp.launch(K.count_needed, n, inputs=[self.vt_count, self.needed, 0])
+                    wp.launch(K.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
+                    wp.launch(K.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
+                wp.launch(K.finish_bounds, n, inputs=[self.min_dist, 0.4, self.bound])
+                wp.launch(K.initial_guess, n, inputs=[self.x_prev, self.y, self.bound, m.active, x])
+                wp.copy(self.x_nm1, x)
+                omega = 1.0
+                for it in range(c.iterations):
+                    for col in m.colours:
+                        wp.launch(K.solve_colour, col.shape[0], inputs=[
+                            col, x, self.x_prev, self.y, m.mass, m.active, self.bound, m.damping, m.friction,
+                            m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.rest_angle, m.bend_k,
+                            m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
+                            self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
+                            c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
+                            self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
+                            c.friction_velocity * h, h, self.x_tmp])
+                        wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
+                    rho = c.chebyshev_rho
+                    omega = 1.0 if it < 1 else (2.0 / (2.0 - rho * rho) if it == 1 else 4.0 / (4.0 - rho * rho * omega))
+                    wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_prev, self.bound, m.active,
+                                                      omega])
+                wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
+        return int(self.needed.numpy().max()) if c.self_collision else 0
