@@ -348,8 +348,9 @@ def membrane_force_hessian(i: int, local: int, f: int, x: wp.array(dtype=wp.vec3
     m01 = (kuv + ks) * c[0] * c[1]
     hess = (wp.outer(f0, f0) * m00 + wp.outer(f1, f1) * m11 + (wp.outer(f0, f1) + wp.outer(f1, f0)) * m01) * A
     if damping > 0.0:
-        # Rayleigh damping: the material tangent applied to the strain rate of the whole triangle
-        # over the substep (zero for rigid motions)
+        # viscous (Rayleigh) damping: the material tangent applied to the Green strain rate of the
+        # whole triangle over the substep (zero for rigid motions; no geometric part, which would
+        # feed energy in under compression)
         u0 = x0 - x_prev[faces[f, 0]]
         u1 = x1 - x_prev[faces[f, 1]]
         u2 = x2 - x_prev[faces[f, 2]]
@@ -362,8 +363,7 @@ def membrane_force_hessian(i: int, local: int, f: int, x: wp.array(dtype=wp.vec3
         t11 = kv * r11 + kuv * r00
         t01 = 2.0 * ks * r01
         scale = damping / h
-        force = force - (f0 * (t00 * c[0] + t01 * c[1]) + f1 * (t01 * c[0] + t11 * c[1]) + d0 * sc0 + d1 * sc1) * (
-            A * scale)
+        force = force - (f0 * (t00 * c[0] + t01 * c[1]) + f1 * (t01 * c[0] + t11 * c[1])) * (A * scale)
         hess = hess * (1.0 + scale)
     geo = c[0] * sc0 + c[1] * sc1
     if geo > 0.0:

@@ -1,0 +1,161 @@
+"""Per-frame physics measurements of every scene, and the verdict on a scene that failed.
+
+Measured per scene and frame: maximum and mean stretch (largest principal stretch of each
+triangle minus one), garment vertices inside the body (count and deepest depth, by warp's
+winding-number query on the posed body), self-intersections (cloth edges crossing a cloth
+triangle that shares no vertex with them; every pair of intersecting triangles has at least one),
+kinetic energy, and whether any value is not finite.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import warp as wp
+
+METRIC_NAMES = ("stretch_max", "stretch_mean", "penetration_count", "penetration_depth", "self_intersections",
+                "kinetic_energy", "nan")
+
+
+@dataclass(frozen=True, kw_only=True)
+class FailureThresholds:
+    """A scene fails when any frame passes one of these (the reason is recorded).
+
+    Attributes:
+        penetration_share: share of garment vertices inside the body.
+        penetration_depth: depth of the deepest vertex inside the body [m].
+        self_intersections: edge-triangle crossings of the cloth with itself.
+        stretch: largest principal stretch minus one (strain blow-up).
+    """
+
+    penetration_share: float = 0.01
+    penetration_depth: float = 0.02
+    self_intersections: int = 50
+    stretch: float = 1.0
+
+
+@wp.kernel
+def _inside(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+            scene: wp.array(dtype=wp.int32), depth: wp.array(dtype=float)):
+    i = wp.tid()
+    p = x[i] + offset[scene[i]]
+    depth[i] = 0.0
+    q = wp.mesh_query_point_sign_winding_number(body_mesh, p, 0.5, 2.0, 0.5)
+    if q.result and q.sign < 0.0:
+        depth[i] = wp.length(p - wp.mesh_eval_position(body_mesh, q.face, q.u, q.v))
+
+
+@wp.func
+def _segment_crosses(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> bool:
+    n = wp.cross(b - a, c - a)
+    dp = wp.dot(p - a, n)
+    dq = wp.dot(q - a, n)
+    if dp * dq > 0.0 or dp == dq:
+        return False
+    t = dp / (dp - dq)
+    r = p + (q - p) * t
+    c0 = wp.dot(wp.cross(b - a, r - a), n)
+    c1 = wp.dot(wp.cross(c - b, r - b), n)
+    c2 = wp.dot(wp.cross(a - c, r - c), n)
+    return (c0 >= 0.0 and c1 >= 0.0 and c2 >= 0.0) or (c0 <= 0.0 and c1 <= 0.0 and c2 <= 0.0)
+
+
+@wp.kernel
+def _crossings(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+               scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+               out: wp.array(dtype=wp.int32)):
+    e = wp.tid()
+    a = edges[e, 0]
+    b = edges[e, 1]
+    off = offset[scene[a]]
+    qry = wp.mesh_query_aabb(cloth_mesh, wp.min(x[a], x[b]) + off, wp.max(x[a], x[b]) + off)
+    t = int(0)
+    n = int(0)
+    while wp.mesh_query_aabb_next(qry, t):
+        i = faces[t, 0]
+        j = faces[t, 1]
+        k = faces[t, 2]
+        if i == a or i == b or j == a or j == b or k == a or k == b or scene[i] != scene[a]:
+            continue
+        if _segment_crosses(x[a], x[b], x[i], x[j], x[k]):
+            n += 1
+    out[e] = n
+
+
+class Metrics:
+    """Measures every scene of a model each frame (arrays on the model's device)."""
+
+    def __init__(self, model):
+        self.model = model
+        m = model
+        with wp.ScopedDevice(m.device):
+            self._depth = wp.zeros(m.particle_count, dtype=float)
+            self._cross = wp.zeros(m.edge_count, dtype=wp.int32)
+            self._shifted = wp.zeros(m.particle_count, dtype=wp.vec3)
+            self._mesh = wp.Mesh(points=self._shifted, indices=m.faces.flatten())
+        h = m.host
+        self._scene = h["particle_scene"]
+        self._face_scene = self._scene[h["faces"][:, 0]]
+        self._edge_scene = self._scene[h["edges"][:, 0]]
+        self._counts = np.bincount(self._scene, minlength=m.scene_count)
+
+    def measure(self, state, solver) -> dict[str, np.ndarray]:
+        """Metrics of every scene [scene_count] for the current state (the solver's body pose)."""
+        from datagen.sim import kernels as K
+
+        m, h, S = self.model, self.model.host, self.model.scene_count
+        x_wp = state.positions
+        with wp.ScopedDevice(m.device):
+            wp.launch(_inside, m.particle_count, inputs=[solver.body_mesh.id, x_wp, m.scene_offset, m.particle_scene,
+                                                         self._depth])
+            wp.launch(K.shift_points, m.particle_count, inputs=[x_wp, m.scene_offset, m.particle_scene,
+                                                                self._shifted])
+            self._mesh.refit()
+            wp.launch(_crossings, m.edge_count, inputs=[self._mesh.id, x_wp, m.scene_offset, m.particle_scene,
+                                                        m.faces, m.edge_pairs, self._cross])
+        x = x_wp.numpy().astype(np.float64)
+        v = state.velocities.numpy().astype(np.float64)
+        depth = self._depth.numpy()
+        F = h["faces"]
+        D = h["dm_inv"]
+        e1, e2 = x[F[:, 1]] - x[F[:, 0]], x[F[:, 2]] - x[F[:, 0]]
+        f0 = e1 * D[:, 0, 0, None] + e2 * D[:, 1, 0, None]
+        f1 = e1 * D[:, 0, 1, None] + e2 * D[:, 1, 1, None]
+        a, b, c = (f0 * f0).sum(1), (f1 * f1).sum(1), (f0 * f1).sum(1)
+        lam_max = np.sqrt(np.maximum(0.5 * (a + b) + np.sqrt(0.25 * (a - b) ** 2 + c * c), 0.0))
+        stretch = lam_max - 1.0
+        ke = 0.5 * h["mass"] * (v * v).sum(1)
+        bad = ~np.isfinite(x).all(1)
+        area = h["tri_area"]
+        out = {
+            "stretch_max": np.full(S, -np.inf), "stretch_mean": np.zeros(S),
+            "penetration_count": np.bincount(self._scene, weights=depth > 0, minlength=S).astype(np.int64),
+            "penetration_depth": np.zeros(S),
+            "self_intersections": np.bincount(self._edge_scene, weights=self._cross.numpy(), minlength=S).astype(
+                np.int64),
+            "kinetic_energy": np.bincount(self._scene, weights=np.nan_to_num(ke, nan=np.inf), minlength=S),
+            "nan": np.bincount(self._scene, weights=bad, minlength=S) > 0,
+        }
+        np.maximum.at(out["stretch_max"], self._face_scene, np.nan_to_num(stretch, nan=np.inf))
+        out["stretch_mean"] = (np.bincount(self._face_scene, weights=np.nan_to_num(stretch, nan=np.inf) * area,
+                                           minlength=S) / np.bincount(self._face_scene, weights=area, minlength=S))
+        np.maximum.at(out["penetration_depth"], self._scene, depth)
+        return out
+
+    def failure(self, frame: dict[str, np.ndarray], scene: int, thresholds: FailureThresholds) -> str | None:
+        """The reason scene ``scene`` fails on this frame's metrics, or None."""
+        if frame["nan"][scene] or not np.isfinite(frame["kinetic_energy"][scene]):
+            return "nan: positions or velocities are not finite"
+        share = frame["penetration_count"][scene] / self._counts[scene]
+        if share > thresholds.penetration_share:
+            return f"penetration: {share:.1%} of vertices inside the body (limit {thresholds.penetration_share:.1%})"
+        if frame["penetration_depth"][scene] > thresholds.penetration_depth:
+            return (f"penetration: a vertex {frame['penetration_depth'][scene] * 1000:.1f} mm inside the body "
+                    f"(limit {thresholds.penetration_depth * 1000:.0f} mm)")
+        if frame["self_intersections"][scene] > thresholds.self_intersections:
+            return (f"self-intersection: {frame['self_intersections'][scene]} edge-triangle crossings "
+                    f"(limit {thresholds.self_intersections})")
+        if frame["stretch_max"][scene] > thresholds.stretch:
+            return f"stretch: a triangle stretched by {frame['stretch_max'][scene]:.0%} (limit {thresholds.stretch:.0%})"
+        return None
