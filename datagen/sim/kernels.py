@@ -173,10 +173,17 @@ def edge_bounds(x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3), sce
 def detect_body(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
                 scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
                 body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
+                radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
+                inertia_target: wp.array(dtype=wp.vec3),
                 has: wp.array(dtype=wp.int32), point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
                 body_disp: wp.array(dtype=wp.vec3)):
     """Closest point of the body (this substep's pose) within ``query`` of each cloth vertex: a
-    contact plane (point, outward face normal) and the body's displacement there in the substep."""
+    contact plane (point, outward face normal) and the body's displacement there in the substep.
+
+    A vertex that the body's move has put closer than its contact radius (or just inside: less
+    than two radii deep, where the closest face is still the one it came through) is first moved
+    out along the normal, with its inertial target, so the body's push is never held back by the
+    cloth's conservative move bound (which is measured from these positions)."""
     i = wp.tid()
     has[i] = 0
     q = wp.mesh_query_point_no_sign(body_mesh, x[i] + offset[scene[i]], query)
@@ -195,9 +202,15 @@ def detect_body(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.arr
     if ln < 1.0e-20:
         return
     has[i] = 1
+    n = n / ln
     point[i] = p
-    normal[i] = n / ln
+    normal[i] = n
     body_disp[i] = p - (body_prev[a] * w0 + body_prev[b] * w1 + body_prev[c] * w2)
+    d = wp.dot(x[i] - p, n)
+    if active[i] != 0 and d < radius[i] and d > -2.0 * radius[i]:
+        push = n * (radius[i] - d)
+        x[i] = x[i] + push
+        inertia_target[i] = inertia_target[i] + push
 
 
 @wp.kernel

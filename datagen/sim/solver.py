@@ -164,7 +164,7 @@ class SolverVBD:
                                                      c.air_drag, h, self.x_prev, self.y, state.pinned_target])
                 wp.launch(K.detect_body, n, inputs=[self.body_mesh.id, self.x_prev, m.scene_offset, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
-                                                    self.body_has, self.body_point, self.body_normal, self.body_disp])
+                                                    self.body_radius, m.active, self.y, self.body_has, self.body_point, self.body_normal, self.body_disp])
                 self.min_dist.fill_(K.BIG)
                 self.vt_count.zero_()
                 self.tv_count.zero_()
