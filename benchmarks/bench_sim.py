@@ -27,7 +27,7 @@ def prepare(args) -> None:
     model = default_body()
     betas = resolve_betas(model, body="regular")[0]
     g = make_garment("tshirt", model, betas, seed=0, target_edge_length=args.edge)
-    motion, lead = make_motion("walk", seed=0, frames=args.frames).with_lead_in(0.3)
+    motion, _lead = make_motion("walk", seed=0, frames=args.frames).with_lead_in(0.3)
     poses = motion.poses.reshape(motion.frame_count, -1)
     verts, _ = model.pose(np.repeat(betas[None], motion.frame_count, 0), poses, motion.trans)
     shift = (verts[0] - np.asarray(model.shaped(betas[None]))[0]).mean(0)

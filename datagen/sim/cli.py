@@ -6,8 +6,6 @@ import json
 import time
 from pathlib import Path
 
-import numpy as np
-
 from datagen.errors import InputError
 
 
@@ -52,7 +50,7 @@ def _cmd_simulate(args) -> int:
         raise InputError(f"--frames must be >= 1, got {args.frames}")
     try:
         device = str(wp.get_device(args.device))
-    except Exception as exc:  # warp raises RuntimeError/ValueError for unknown or absent devices
+    except (RuntimeError, ValueError) as exc:  # warp: unknown or absent device
         raise InputError(f"warp device {args.device!r} is not available here ({exc}); use --device cpu") from None
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]

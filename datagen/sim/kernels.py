@@ -214,7 +214,8 @@ def detect_body(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.arr
 
 
 @wp.kernel
-def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
+                           offset: wp.array(dtype=wp.vec3),
                            scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32),
                            nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
                            query: float, contact_radius: float, active: wp.array(dtype=wp.int32),
@@ -222,33 +223,44 @@ def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), of
                            tv_count: wp.array(dtype=wp.int32), tv_vert: wp.array2d(dtype=wp.int32),
                            min_dist: wp.array(dtype=float)):
     """Vertex-triangle pairs of the cloth closer than ``contact_radius`` (stored both ways), and
-    every vertex's distance to the nearest non-neighbouring triangle within ``query``."""
+    every vertex's distance to the nearest triangle within ``query`` that is not next to it.
+
+    A triangle next to the vertex (one of its corners is a neighbour) is a contact only when it
+    was farther than 1.5x the contact radius in the rest shape (so flat cloth never pushes on
+    itself), and does not bound the vertex's move (that would cap every vertex's speed at a
+    fraction of an edge length per substep)."""
     i = wp.tid()
     p = x[i] + offset[scene[i]]
     lo = p - wp.vec3(query)
     hi = p + wp.vec3(query)
     qry = wp.mesh_query_aabb(cloth_mesh, lo, hi)
-    t = int(0)
-    n = int(0)
+    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     cap = vt_tri.shape[1]
     cap_t = tv_vert.shape[1]
     while wp.mesh_query_aabb_next(qry, t):
         a = faces[t, 0]
         b = faces[t, 1]
         c = faces[t, 2]
-        if scene[a] != scene[i]:
-            continue
-        if are_neighbours(i, a, nbr_offsets, nbr) or are_neighbours(i, b, nbr_offsets, nbr) or are_neighbours(
-                i, c, nbr_offsets, nbr):
+        if scene[a] != scene[i] or a == i or b == i or c == i:
             continue
         w = triangle_closest_bary(x[i], x[a], x[b], x[c])
         d = wp.length(x[i] - (x[a] * w[0] + x[b] * w[1] + x[c] * w[2]))
         if d > query:
             continue
-        wp.atomic_min(min_dist, i, d)
-        wp.atomic_min(min_dist, a, d)
-        wp.atomic_min(min_dist, b, d)
-        wp.atomic_min(min_dist, c, d)
+        near = are_neighbours(i, a, nbr_offsets, nbr) or are_neighbours(i, b, nbr_offsets, nbr) or are_neighbours(
+            i, c, nbr_offsets, nbr)
+        if near:
+            if d >= contact_radius:
+                continue
+            wr = triangle_closest_bary(rest[i], rest[a], rest[b], rest[c])
+            if wp.length(rest[i] - (rest[a] * wr[0] + rest[b] * wr[1] + rest[c] * wr[2])) < 1.5 * contact_radius:
+                continue
+        else:
+            wp.atomic_min(min_dist, i, d)
+            wp.atomic_min(min_dist, a, d)
+            wp.atomic_min(min_dist, b, d)
+            wp.atomic_min(min_dist, c, d)
         if d < contact_radius:
             if n < cap:
                 vt_tri[i, n] = t
@@ -260,12 +272,14 @@ def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), of
 
 
 @wp.kernel
-def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
+                     offset: wp.array(dtype=wp.vec3),
                      scene: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                      nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32), query: float,
                      contact_radius: float, ee_count: wp.array(dtype=wp.int32), ee_edge: wp.array2d(dtype=wp.int32),
                      min_dist: wp.array(dtype=float)):
-    """Edge-edge pairs of the cloth closer than ``contact_radius`` (each edge stores its own)."""
+    """Edge-edge pairs of the cloth closer than ``contact_radius`` (each edge stores its own);
+    edges next to each other are treated as in :func:`detect_vertex_triangle`."""
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
@@ -274,25 +288,31 @@ def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp
     lo = wp.min(pa, pb) - wp.vec3(query)
     hi = wp.max(pa, pb) + wp.vec3(query)
     qry = wp.bvh_query_aabb(edge_bvh, lo, hi)
-    f = int(0)
-    n = int(0)
+    f = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     cap = ee_edge.shape[1]
     while wp.bvh_query_next(qry, f):
         if f == e:
             continue
         c = edges[f, 0]
         d = edges[f, 1]
-        if scene[c] != scene[a]:
-            continue
-        if are_neighbours(a, c, nbr_offsets, nbr) or are_neighbours(a, d, nbr_offsets, nbr) or are_neighbours(
-                b, c, nbr_offsets, nbr) or are_neighbours(b, d, nbr_offsets, nbr):
+        if scene[c] != scene[a] or a == c or a == d or b == c or b == d:
             continue
         st = wp.closest_point_edge_edge(x[a], x[b], x[c], x[d], 1.0e-12)
         dist = st[2]
         if dist > query:
             continue
-        wp.atomic_min(min_dist, a, dist)
-        wp.atomic_min(min_dist, b, dist)
+        near = are_neighbours(a, c, nbr_offsets, nbr) or are_neighbours(a, d, nbr_offsets, nbr) or are_neighbours(
+            b, c, nbr_offsets, nbr) or are_neighbours(b, d, nbr_offsets, nbr)
+        if near:
+            if dist >= contact_radius:
+                continue
+            sr = wp.closest_point_edge_edge(rest[a], rest[b], rest[c], rest[d], 1.0e-12)
+            if sr[2] < 1.5 * contact_radius:
+                continue
+        else:
+            wp.atomic_min(min_dist, a, dist)
+            wp.atomic_min(min_dist, b, dist)
         if dist < contact_radius:
             if n < cap:
                 ee_edge[e, n] = f

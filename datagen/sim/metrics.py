@@ -70,8 +70,8 @@ def _crossings(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.arr
     b = edges[e, 1]
     off = offset[scene[a]]
     qry = wp.mesh_query_aabb(cloth_mesh, wp.min(x[a], x[b]) + off, wp.max(x[a], x[b]) + off)
-    t = int(0)
-    n = int(0)
+    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     while wp.mesh_query_aabb_next(qry, t):
         i = faces[t, 0]
         j = faces[t, 1]

@@ -209,8 +209,8 @@ class ClothModelBuilder:
                            scene_count=scene_count, host=host, body_vertex_count=len(host["body_rest"]))
         arr = {}
         with wp.ScopedDevice(device):
-            f32 = lambda a, dt=float: wp.array(np.asarray(a, dtype=np.float32), dtype=dt)  # noqa: E731
-            i32 = lambda a: wp.array(np.ascontiguousarray(a, dtype=np.int32))  # noqa: E731
+            f32 = lambda a, dt=float: wp.array(np.asarray(a, dtype=np.float32), dtype=dt)
+            i32 = lambda a: wp.array(np.ascontiguousarray(a, dtype=np.int32))
             arr.update(rest_positions=f32(X, wp.vec3), mass=f32(mass), vertex_area=f32(varea), active=i32(active),
                        particle_scene=i32(scene), faces=i32(F), dm_inv=f32(dm_inv, wp.mat22), tri_area=f32(area),
                        tri_stiff=f32(stiff, wp.vec4), edges=i32(E), rest_angle=f32(rest_angle), bend_k=f32(bend_k),

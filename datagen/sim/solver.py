@@ -79,7 +79,7 @@ class SolverVBD:
         m = model
         n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
         with wp.ScopedDevice(m.device):
-            z3 = lambda k: wp.zeros(k, dtype=wp.vec3)  # noqa: E731
+            z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
@@ -177,11 +177,11 @@ class SolverVBD:
                                                          0.0, self.edge_lo, self.edge_hi])
                     self.edge_bvh.refit()
                     wp.launch(K.detect_vertex_triangle, n,
-                              inputs=[self.cloth_mesh.id, self.x_prev, m.scene_offset, m.particle_scene, m.faces,
+                              inputs=[self.cloth_mesh.id, self.x_prev, m.rest_positions, m.scene_offset, m.particle_scene, m.faces,
                                       m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
                                       self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
                     wp.launch(K.detect_edge_edge, ne,
-                              inputs=[self.edge_bvh.id, self.x_prev, m.scene_offset, m.particle_scene, m.edge_pairs,
+                              inputs=[self.edge_bvh.id, self.x_prev, m.rest_positions, m.scene_offset, m.particle_scene, m.edge_pairs,
                                       m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.ee_count,
                                       self.ee_edge, self.min_dist])
                     wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
