@@ -459,6 +459,7 @@ def solve_colour(
     colour_verts: wp.array(dtype=wp.int32),
     x: wp.array(dtype=wp.vec3),
     x_prev: wp.array(dtype=wp.vec3),
+    x_det: wp.array(dtype=wp.vec3),
     inertia_target: wp.array(dtype=wp.vec3),
     mass: wp.array(dtype=float),
     active: wp.array(dtype=wp.int32),
@@ -592,10 +593,10 @@ def solve_colour(
         return
     dx = wp.inverse(hess) * force
     new = xi + dx
-    move = new - x_prev[i]
+    move = new - x_det[i]
     L = wp.length(move)
     if L > bound[i]:
-        new = x_prev[i] + move * (bound[i] / L)
+        new = x_det[i] + move * (bound[i] / L)
     x_out[i] = new
 
 
@@ -615,7 +616,7 @@ def count_needed(count: wp.array(dtype=wp.int32), needed: wp.array(dtype=wp.int3
 
 @wp.kernel
 def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2: wp.array(dtype=wp.vec3),
-              x_prev: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
+              x_det: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
               omega: float):
     """Chebyshev semi-iterative acceleration of the sweeps (Wang 2015; VBD §3.5), bounded like the
     sweeps themselves; keeps the last two iterates."""
@@ -623,10 +624,10 @@ def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2:
     xi = x[i]
     if active[i] != 0 and omega != 1.0:
         xi = x_nm2[i] + (xi - x_nm2[i]) * omega
-        move = xi - x_prev[i]
+        move = xi - x_det[i]
         L = wp.length(move)
         if L > bound[i]:
-            xi = x_prev[i] + move * (bound[i] / L)
+            xi = x_det[i] + move * (bound[i] / L)
         x[i] = xi
     x_nm2[i] = x_nm1[i]
     x_nm1[i] = xi

@@ -35,6 +35,9 @@ class SolverConfig:
         friction_velocity: velocity below which friction is smoothed (static) [m/s].
         contact_capacity: initial contacts stored per vertex, triangle and edge (grows on demand).
         chebyshev_rho: spectral radius estimate for Chebyshev acceleration of the sweeps (0: off).
+        detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
+            substep); each detection renews the move bounds from the current positions, so cloth
+            pressed between the body and other cloth can follow a fast body.
     """
 
     substeps: int = 10
@@ -52,6 +55,7 @@ class SolverConfig:
     friction_velocity: float = 1.0e-3
     contact_capacity: int = 16
     chebyshev_rho: float = 0.9
+    detection_interval: int = 3
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -81,7 +85,7 @@ class SolverVBD:
         with wp.ScopedDevice(m.device):
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
-            self.x_nm1, self.x_nm2 = z3(n), z3(n)
+            self.x_nm1, self.x_nm2, self.x_det = z3(n), z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
             self.body_has = wp.zeros(n, dtype=wp.int32)
@@ -142,6 +146,37 @@ class SolverVBD:
                                       "step with separate input and output states")
         raise SimulationError(f"contact buffers kept overflowing (last need {need} per element)")
 
+    def _detect_self(self) -> None:
+        """Cloth-cloth pairs and every vertex's move bound at the positions ``x_det``."""
+        import warp as wp
+
+        K, m, c = self.K, self.model, self.config
+        n, nf, ne = m.particle_count, m.face_count, m.edge_count
+        self.min_dist.fill_(K.BIG)
+        self.vt_count.zero_()
+        self.tv_count.zero_()
+        self.ee_count.zero_()
+        if c.self_collision:
+            xd = self.x_det
+            wp.launch(K.shift_points, n, inputs=[xd, m.scene_offset, m.particle_scene, self.cloth_shifted])
+            self.cloth_mesh.refit()
+            wp.launch(K.edge_bounds, ne, inputs=[xd, m.scene_offset, m.particle_scene, m.edge_pairs, 0.0,
+                                                 self.edge_lo, self.edge_hi])
+            self.edge_bvh.refit()
+            wp.launch(K.detect_vertex_triangle, n,
+                      inputs=[self.cloth_mesh.id, xd, m.rest_positions, m.scene_offset, m.particle_scene, m.faces,
+                              m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
+                              self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
+            wp.launch(K.detect_edge_edge, ne,
+                      inputs=[self.edge_bvh.id, xd, m.rest_positions, m.scene_offset, m.particle_scene, m.edge_pairs,
+                              m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.ee_count,
+                              self.ee_edge, self.min_dist])
+            wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
+            wp.launch(K.count_needed, n, inputs=[self.vt_count, self.needed, 0])
+            wp.launch(K.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
+            wp.launch(K.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
+        wp.launch(K.finish_bounds, n, inputs=[self.min_dist, 0.4, self.bound])
+
     def _step(self, state, control, dt: float) -> int:
         import warp as wp
 
@@ -165,47 +200,31 @@ class SolverVBD:
                 wp.launch(K.detect_body, n, inputs=[self.body_mesh.id, self.x_prev, m.scene_offset, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
                                                     self.body_radius, m.active, self.y, self.body_has, self.body_point, self.body_normal, self.body_disp])
-                self.min_dist.fill_(K.BIG)
-                self.vt_count.zero_()
-                self.tv_count.zero_()
-                self.ee_count.zero_()
-                if c.self_collision:
-                    wp.launch(K.shift_points, n, inputs=[self.x_prev, m.scene_offset, m.particle_scene,
-                                                         self.cloth_shifted])
-                    self.cloth_mesh.refit()
-                    wp.launch(K.edge_bounds, ne, inputs=[self.x_prev, m.scene_offset, m.particle_scene, m.edge_pairs,
-                                                         0.0, self.edge_lo, self.edge_hi])
-                    self.edge_bvh.refit()
-                    wp.launch(K.detect_vertex_triangle, n,
-                              inputs=[self.cloth_mesh.id, self.x_prev, m.rest_positions, m.scene_offset, m.particle_scene, m.faces,
-                                      m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
-                                      self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
-                    wp.launch(K.detect_edge_edge, ne,
-                              inputs=[self.edge_bvh.id, self.x_prev, m.rest_positions, m.scene_offset, m.particle_scene, m.edge_pairs,
-                                      m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.ee_count,
-                                      self.ee_edge, self.min_dist])
-                    wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
-                    wp.launch(K.count_needed, n, inputs=[self.vt_count, self.needed, 0])
-                    wp.launch(K.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
-                    wp.launch(K.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
-                wp.launch(K.finish_bounds, n, inputs=[self.min_dist, 0.4, self.bound])
-                wp.launch(K.initial_guess, n, inputs=[self.x_prev, self.y, self.bound, m.active, x])
+                wp.copy(self.x_det, self.x_prev)
+                self._detect_self()
+                wp.launch(K.initial_guess, n, inputs=[self.x_det, self.y, self.bound, m.active, x])
                 wp.copy(self.x_nm1, x)
-                omega = 1.0
+                omega, cheb = 1.0, 0
+                rho = c.chebyshev_rho
                 for it in range(c.iterations):
+                    if c.self_collision and c.detection_interval and it and it % c.detection_interval == 0:
+                        wp.copy(self.x_det, x)
+                        self._detect_self()
+                        wp.copy(self.x_nm1, x)
+                        omega, cheb = 1.0, 0
                     for col in m.colours:
                         wp.launch(K.solve_colour, col.shape[0], inputs=[
-                            col, x, self.x_prev, self.y, m.mass, m.active, self.bound, m.damping, m.friction,
-                            m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.rest_angle, m.bend_k,
+                            col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
+                            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.rest_angle, m.bend_k,
                             m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
                             self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
                             c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
                             self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
                             c.friction_velocity * h, h, self.x_tmp])
                         wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
-                    rho = c.chebyshev_rho
-                    omega = 1.0 if it < 1 else (2.0 / (2.0 - rho * rho) if it == 1 else 4.0 / (4.0 - rho * rho * omega))
-                    wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_prev, self.bound, m.active,
+                    omega = 1.0 if cheb < 1 else (2.0 / (2.0 - rho * rho) if cheb == 1 else 4.0 / (4.0 - rho * rho * omega))
+                    cheb += 1
+                    wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
                                                       omega])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
         return int(self.needed.numpy().max()) if c.self_collision else 0
