@@ -181,7 +181,7 @@ class SolverVBD:
         import warp as wp
 
         K, m, c = self.K, self.model, self.config
-        n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
+        n, nb = m.particle_count, m.body_vertex_count
         h = dt / c.substeps
         x, v = state.positions, state.velocities
         self.needed.zero_()
