@@ -142,36 +142,25 @@ def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
 
 @wp.kernel
 def interpolate_body(b0: wp.array(dtype=wp.vec3), b1: wp.array(dtype=wp.vec3), alpha: float,
-                     offset: wp.array(dtype=wp.vec3), vert_scene: wp.array(dtype=wp.int32),
-                     out: wp.array(dtype=wp.vec3), out_shifted: wp.array(dtype=wp.vec3)):
-    """Body vertices at ``alpha`` within the frame; the shifted copy is what the BVH sees."""
+                     out: wp.array(dtype=wp.vec3)):
+    """Body vertices at ``alpha`` within the frame."""
     i = wp.tid()
-    p = b0[i] * (1.0 - alpha) + b1[i] * alpha
-    out[i] = p
-    out_shifted[i] = p + offset[vert_scene[i]]
+    out[i] = b0[i] * (1.0 - alpha) + b1[i] * alpha
 
 
 @wp.kernel
-def shift_points(x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
-                 out: wp.array(dtype=wp.vec3)):
-    i = wp.tid()
-    out[i] = x[i] + offset[scene[i]]
-
-
-@wp.kernel
-def edge_bounds(x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
-                edges: wp.array2d(dtype=wp.int32), pad: float, lower: wp.array(dtype=wp.vec3),
-                upper: wp.array(dtype=wp.vec3)):
+def edge_bounds(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), pad: float,
+                lower: wp.array(dtype=wp.vec3), upper: wp.array(dtype=wp.vec3)):
     e = wp.tid()
-    a = x[edges[e, 0]] + offset[scene[edges[e, 0]]]
-    b = x[edges[e, 1]] + offset[scene[edges[e, 0]]]
+    a = x[edges[e, 0]]
+    b = x[edges[e, 1]]
     lower[e] = wp.min(a, b) - wp.vec3(pad)
     upper[e] = wp.max(a, b) + wp.vec3(pad)
 
 
 @wp.kernel
-def detect_body(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
-                scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
+def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
+                x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
                 body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
                 radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
                 inertia_target: wp.array(dtype=wp.vec3),
@@ -186,10 +175,11 @@ def detect_body(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.arr
     cloth's conservative move bound (which is measured from these positions)."""
     i = wp.tid()
     has[i] = 0
-    q = wp.mesh_query_point_no_sign(body_mesh, x[i] + offset[scene[i]], query)
+    s = scene[i]
+    q = wp.mesh_query_point_no_sign(body_meshes[s], x[i], query)
     if not q.result:
         return
-    f = q.face
+    f = body_face_base[s] + q.face
     a = body_faces[f, 0]
     b = body_faces[f, 1]
     c = body_faces[f, 2]
@@ -214,8 +204,8 @@ def detect_body(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.arr
 
 
 @wp.kernel
-def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
-                           offset: wp.array(dtype=wp.vec3),
+def detect_vertex_triangle(cloth_meshes: wp.array(dtype=wp.uint64), face_base: wp.array(dtype=wp.int32),
+                           x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                            scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32),
                            nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
                            query: float, contact_radius: float, active: wp.array(dtype=wp.int32),
@@ -230,19 +220,21 @@ def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), re
     itself), and does not bound the vertex's move (that would cap every vertex's speed at a
     fraction of an edge length per substep)."""
     i = wp.tid()
-    p = x[i] + offset[scene[i]]
+    p = x[i]
     lo = p - wp.vec3(query)
     hi = p + wp.vec3(query)
-    qry = wp.mesh_query_aabb(cloth_mesh, lo, hi)
-    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    qry = wp.mesh_query_aabb(cloth_meshes[scene[i]], lo, hi)
+    base = face_base[scene[i]]
+    tl = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     cap = vt_tri.shape[1]
     cap_t = tv_vert.shape[1]
-    while wp.mesh_query_aabb_next(qry, t):
+    while wp.mesh_query_aabb_next(qry, tl):
+        t = base + tl
         a = faces[t, 0]
         b = faces[t, 1]
         c = faces[t, 2]
-        if scene[a] != scene[i] or a == i or b == i or c == i:
+        if a == i or b == i or c == i:
             continue
         w = triangle_closest_bary(x[i], x[a], x[b], x[c])
         d = wp.length(x[i] - (x[a] * w[0] + x[b] * w[1] + x[c] * w[2]))
@@ -272,8 +264,8 @@ def detect_vertex_triangle(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), re
 
 
 @wp.kernel
-def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
-                     offset: wp.array(dtype=wp.vec3),
+def detect_edge_edge(edge_bvhs: wp.array(dtype=wp.uint64), edge_base: wp.array(dtype=wp.int32),
+                     x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                      scene: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                      nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32), query: float,
                      contact_radius: float, ee_count: wp.array(dtype=wp.int32), ee_edge: wp.array2d(dtype=wp.int32),
@@ -283,20 +275,22 @@ def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.a
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
-    pa = x[a] + offset[scene[a]]
-    pb = x[b] + offset[scene[a]]
+    pa = x[a]
+    pb = x[b]
     lo = wp.min(pa, pb) - wp.vec3(query)
     hi = wp.max(pa, pb) + wp.vec3(query)
-    qry = wp.bvh_query_aabb(edge_bvh, lo, hi)
-    f = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    qry = wp.bvh_query_aabb(edge_bvhs[scene[a]], lo, hi)
+    base = edge_base[scene[a]]
+    fl = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     cap = ee_edge.shape[1]
-    while wp.bvh_query_next(qry, f):
+    while wp.bvh_query_next(qry, fl):
+        f = base + fl
         if f == e:
             continue
         c = edges[f, 0]
         d = edges[f, 1]
-        if scene[c] != scene[a] or a == c or a == d or b == c or b == d:
+        if a == c or a == d or b == c or b == d:
             continue
         st = wp.closest_point_edge_edge(x[a], x[b], x[c], x[d], 1.0e-12)
         dist = st[2]

@@ -36,14 +36,15 @@ class FailureThresholds:
 
 
 @wp.kernel
-def _inside(body_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
-            scene: wp.array(dtype=wp.int32), depth: wp.array(dtype=float)):
+def _inside(body_meshes: wp.array(dtype=wp.uint64), x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
+            depth: wp.array(dtype=float)):
     i = wp.tid()
-    p = x[i] + offset[scene[i]]
+    p = x[i]
+    mesh = body_meshes[scene[i]]
     depth[i] = 0.0
-    q = wp.mesh_query_point_sign_winding_number(body_mesh, p, 0.5, 2.0, 0.5)
+    q = wp.mesh_query_point_sign_winding_number(mesh, p, 0.5, 2.0, 0.5)
     if q.result and q.sign < 0.0:
-        depth[i] = wp.length(p - wp.mesh_eval_position(body_mesh, q.face, q.u, q.v))
+        depth[i] = wp.length(p - wp.mesh_eval_position(mesh, q.face, q.u, q.v))
 
 
 @wp.func
@@ -62,21 +63,22 @@ def _segment_crosses(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3)
 
 
 @wp.kernel
-def _crossings(cloth_mesh: wp.uint64, x: wp.array(dtype=wp.vec3), offset: wp.array(dtype=wp.vec3),
+def _crossings(cloth_meshes: wp.array(dtype=wp.uint64), face_base: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
                scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                out: wp.array(dtype=wp.int32)):
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
-    off = offset[scene[a]]
-    qry = wp.mesh_query_aabb(cloth_mesh, wp.min(x[a], x[b]) + off, wp.max(x[a], x[b]) + off)
-    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    qry = wp.mesh_query_aabb(cloth_meshes[scene[a]], wp.min(x[a], x[b]), wp.max(x[a], x[b]))
+    base = face_base[scene[a]]
+    tl = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
-    while wp.mesh_query_aabb_next(qry, t):
+    while wp.mesh_query_aabb_next(qry, tl):
+        t = base + tl
         i = faces[t, 0]
         j = faces[t, 1]
         k = faces[t, 2]
-        if i == a or i == b or j == a or j == b or k == a or k == b or scene[i] != scene[a]:
+        if i == a or i == b or j == a or j == b or k == a or k == b:
             continue
         if _segment_crosses(x[a], x[b], x[i], x[j], x[k]):
             n += 1
@@ -92,8 +94,12 @@ class Metrics:
         with wp.ScopedDevice(m.device):
             self._depth = wp.zeros(m.particle_count, dtype=float)
             self._cross = wp.zeros(m.edge_count, dtype=wp.int32)
-            self._shifted = wp.zeros(m.particle_count, dtype=wp.vec3)
-            self._mesh = wp.Mesh(points=self._shifted, indices=m.faces.flatten())
+            self._pos = wp.clone(m.rest_positions)
+            h = m.host
+            self._meshes = [wp.Mesh(points=self._pos[int(p0):int(p1)], indices=wp.array(
+                (h["faces"][f0:f1] - p0).astype(np.int32).ravel()))
+                for (p0, p1), (f0, f1) in zip(h["particle_range"], h["face_range"])]
+            self._ids = wp.array([x.id for x in self._meshes], dtype=wp.uint64)
         h = m.host
         self._scene = h["particle_scene"]
         self._face_scene = self._scene[h["faces"][:, 0]]
@@ -102,18 +108,15 @@ class Metrics:
 
     def measure(self, state, solver) -> dict[str, np.ndarray]:
         """Metrics of every scene [scene_count] for the current state (the solver's body pose)."""
-        from datagen.sim import kernels as K
-
         m, h, S = self.model, self.model.host, self.model.scene_count
         x_wp = state.positions
         with wp.ScopedDevice(m.device):
-            wp.launch(_inside, m.particle_count, inputs=[solver.body_mesh.id, x_wp, m.scene_offset, m.particle_scene,
-                                                         self._depth])
-            wp.launch(K.shift_points, m.particle_count, inputs=[x_wp, m.scene_offset, m.particle_scene,
-                                                                self._shifted])
-            self._mesh.refit()
-            wp.launch(_crossings, m.edge_count, inputs=[self._mesh.id, x_wp, m.scene_offset, m.particle_scene,
-                                                        m.faces, m.edge_pairs, self._cross])
+            wp.launch(_inside, m.particle_count, inputs=[solver.body_ids, x_wp, m.particle_scene, self._depth])
+            wp.copy(self._pos, x_wp)
+            for mesh in self._meshes:
+                mesh.refit()
+            wp.launch(_crossings, m.edge_count, inputs=[self._ids, m.face_base, x_wp, m.particle_scene, m.faces,
+                                                        m.edge_pairs, self._cross])
         x = x_wp.numpy().astype(np.float64)
         v = state.velocities.numpy().astype(np.float64)
         depth = self._depth.numpy()

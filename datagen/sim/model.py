@@ -3,9 +3,10 @@
 ``ClothModelBuilder.add_cloth(...)`` adds one garment (a triangle mesh with its material) to a
 scene with its own body; ``finalize(device)`` concatenates every scene into flat warp arrays:
 rest geometry, per-triangle material frames and stiffnesses, hinge edges, vertex adjacency and a
-graph colouring for the vertex block descent solver. Scenes share no vertex, edge or contact,
-and the collision structures place each scene in its own region of space (``SCENE_SPACING``),
-so a scene's result does not depend on what else is in its batch.
+graph colouring for the vertex block descent solver. Scenes share no vertex, edge or contact;
+each scene's vertices, faces and edges are contiguous, each scene has its own collision
+structures and its own colouring (merged by colour index), so a scene's result does not depend
+on what else is in its batch.
 """
 
 from __future__ import annotations
@@ -16,9 +17,6 @@ import numpy as np
 
 from datagen.errors import InputError
 from datagen.garment.materials import Material, material
-
-SCENE_SPACING = 100.0
-"""Distance [m] between scenes in the collision structures (never in the positions)."""
 
 
 @dataclass
@@ -58,7 +56,6 @@ class ClothModel:
     body_vertex_count: int = 0
     host: dict = field(default_factory=dict)
     colours: list = field(default_factory=list)
-    scene_offset: object = None
 
 
 class ClothModelBuilder:
@@ -83,7 +80,8 @@ class ClothModelBuilder:
 
     def add_cloth(self, vertices, faces, *, material_name: Material | str = "cotton", scene: int = 0,
                   material_frames: np.ndarray | None = None, pinned: np.ndarray | None = None) -> int:
-        """Add a cloth mesh to ``scene``; returns the id of its first vertex in the model.
+        """Add a cloth mesh to ``scene``; returns the id its first vertex will have in the model
+        when cloths are added in scene order (``finalize`` groups them by scene).
 
         Args:
             vertices: rest (and start) positions [m], shape [V, 3].
@@ -117,6 +115,7 @@ class ClothModelBuilder:
         if not self._parts:
             raise InputError("the model has no cloth: add a garment first")
         device = str(wp.get_device(device))
+        self._parts.sort(key=lambda p: p.scene)  # stable: each scene's cloth contiguous
         verts, faces, scene_of, frames, mats, pins, face_mat = [], [], [], [], [], [], []
         base = 0
         for k, p in enumerate(self._parts):
@@ -201,9 +200,17 @@ class ClothModelBuilder:
             bbase += len(v)
         host.update(body_rest=np.concatenate(bv), body_faces=np.concatenate(bf), body_vert_scene=np.concatenate(bs),
                     body_ranges=np.array(body_ranges), scenes_without_body=missing)
-        offsets = np.zeros((scene_count, 3))
-        offsets[:, 0] = np.arange(scene_count) * SCENE_SPACING
-        host["scene_offset"] = offsets
+        without_cloth = sorted(set(range(scene_count)) - set(scene.tolist()))
+        if without_cloth:
+            raise InputError(f"scenes {without_cloth} have a body but no cloth: number scenes 0..N-1, each with cloth")
+        bounds = lambda a: np.stack([np.searchsorted(a, np.arange(scene_count)),
+                                     np.searchsorted(a, np.arange(scene_count), side="right")], 1)
+        host["particle_range"] = bounds(scene)
+        host["face_range"] = bounds(scene[F[:, 0]])
+        host["edge_range"] = bounds(scene[E[:, 0]])
+        host["body_face_range"] = bounds(host["body_vert_scene"][host["body_faces"][:, 0]])
+        if (np.diff(scene[E[:, 0]]) < 0).any() or (np.diff(scene[F[:, 0]]) < 0).any():
+            raise AssertionError("edges and faces must be grouped by scene")
 
         model = ClothModel(device=device, particle_count=len(X), face_count=len(F), edge_count=len(E),
                            scene_count=scene_count, host=host, body_vertex_count=len(host["body_rest"]))
@@ -217,10 +224,20 @@ class ClothModelBuilder:
                        v2f_offsets=i32(host["v2f_offsets"]), v2f=i32(host["v2f"]),
                        v2e_offsets=i32(host["v2e_offsets"]), v2e=i32(host["v2e"]),
                        nbr_offsets=i32(host["nbr_offsets"]), nbr=i32(host["nbr"]), damping=f32(damping),
-                       friction=f32(friction), thickness=f32(thickness), scene_offset=f32(offsets, wp.vec3),
+                       friction=f32(friction), thickness=f32(thickness),
+                       face_base=i32(host["face_range"][:, 0]), edge_base=i32(host["edge_range"][:, 0]),
+                       body_face_base=i32(host["body_face_range"][:, 0]),
                        edge_pairs=i32(E[:, :2]), body_rest=f32(host["body_rest"], wp.vec3),
                        body_faces=i32(host["body_faces"]), body_vert_scene=i32(host["body_vert_scene"]))
-            model.colours = [i32(c) for c in _colour(len(X), host["conflicts"])]
+            colours: list[list[np.ndarray]] = []
+            conf = host["conflicts"]
+            for s_, (p0, p1) in enumerate(host["particle_range"]):
+                mine = conf[scene[conf[:, 0]] == s_] - p0
+                for k, c in enumerate(_colour(int(p1 - p0), mine)):
+                    if k == len(colours):
+                        colours.append([])
+                    colours[k].append(c + p0)
+            model.colours = [i32(np.concatenate(c)) for c in colours]
         for k, a in arr.items():
             object.__setattr__(model, k, a)
         return model

@@ -85,25 +85,35 @@ class SolverVBD:
         with wp.ScopedDevice(m.device):
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
-            self.x_nm1, self.x_nm2, self.x_det = z3(n), z3(n), z3(n)
+            self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
             self.body_has = wp.zeros(n, dtype=wp.int32)
             self.body_point, self.body_normal, self.body_disp = z3(n), z3(n), z3(n)
             self.body_radius = wp.array(m.host["thickness"].astype(np.float32) + self.config.body_margin, dtype=float)
             self.body_start = wp.clone(m.body_rest)
-            self.body_prev_sub, self.body_sub, self.body_shifted = z3(nb), z3(nb), z3(nb)
-            wp.launch(K.interpolate_body, nb, inputs=[self.body_start, self.body_start, 0.0, m.scene_offset,
-                                                      m.body_vert_scene, self.body_sub, self.body_shifted])
-            self.body_mesh = wp.Mesh(points=self.body_shifted, indices=m.body_faces.flatten())
-            self.cloth_shifted = z3(n)
-            wp.launch(K.shift_points, n, inputs=[m.rest_positions, m.scene_offset, m.particle_scene,
-                                                 self.cloth_shifted])
-            self.cloth_mesh = wp.Mesh(points=self.cloth_shifted, indices=m.faces.flatten())
+            self.body_prev_sub, self.body_sub = z3(nb), wp.clone(m.body_rest)
+            self.x_det = wp.clone(m.rest_positions)
             self.edge_lo, self.edge_hi = z3(ne), z3(ne)
-            wp.launch(K.edge_bounds, ne, inputs=[m.rest_positions, m.scene_offset, m.particle_scene, m.edge_pairs,
-                                                 0.0, self.edge_lo, self.edge_hi])
-            self.edge_bvh = wp.Bvh(self.edge_lo, self.edge_hi)
+            wp.launch(K.edge_bounds, ne, inputs=[m.rest_positions, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
+            # one body mesh, cloth mesh and edge BVH per scene, over views of the flat arrays:
+            # queries in each scene's own coordinates, so nothing depends on the batch
+            h = m.host
+            self.body_meshes, self.cloth_meshes, self.edge_bvhs = [], [], []
+            for s in range(m.scene_count):
+                b0, b1 = h["body_ranges"][s]
+                bf0, bf1 = h["body_face_range"][s]
+                p0, p1 = h["particle_range"][s]
+                f0, f1 = h["face_range"][s]
+                e0, e1 = h["edge_range"][s]
+                self.body_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
+                    (h["body_faces"][bf0:bf1] - b0).astype(np.int32).ravel())))
+                self.cloth_meshes.append(wp.Mesh(points=self.x_det[int(p0):int(p1)], indices=wp.array(
+                    (h["faces"][f0:f1] - p0).astype(np.int32).ravel())))
+                self.edge_bvhs.append(wp.Bvh(self.edge_lo[int(e0):int(e1)], self.edge_hi[int(e0):int(e1)]))
+            self.body_ids = wp.array([x.id for x in self.body_meshes], dtype=wp.uint64)
+            self.cloth_ids = wp.array([x.id for x in self.cloth_meshes], dtype=wp.uint64)
+            self.edge_ids = wp.array([x.id for x in self.edge_bvhs], dtype=wp.uint64)
             self.vt_count = wp.zeros(n, dtype=wp.int32)
             self.tv_count = wp.zeros(nf, dtype=wp.int32)
             self.ee_count = wp.zeros(ne, dtype=wp.int32)
@@ -158,17 +168,17 @@ class SolverVBD:
         self.ee_count.zero_()
         if c.self_collision:
             xd = self.x_det
-            wp.launch(K.shift_points, n, inputs=[xd, m.scene_offset, m.particle_scene, self.cloth_shifted])
-            self.cloth_mesh.refit()
-            wp.launch(K.edge_bounds, ne, inputs=[xd, m.scene_offset, m.particle_scene, m.edge_pairs, 0.0,
-                                                 self.edge_lo, self.edge_hi])
-            self.edge_bvh.refit()
+            for mesh in self.cloth_meshes:
+                mesh.refit()
+            wp.launch(K.edge_bounds, ne, inputs=[xd, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
+            for bvh in self.edge_bvhs:
+                bvh.refit()
             wp.launch(K.detect_vertex_triangle, n,
-                      inputs=[self.cloth_mesh.id, xd, m.rest_positions, m.scene_offset, m.particle_scene, m.faces,
+                      inputs=[self.cloth_ids, m.face_base, xd, m.rest_positions, m.particle_scene, m.faces,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
                               self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
             wp.launch(K.detect_edge_edge, ne,
-                      inputs=[self.edge_bvh.id, xd, m.rest_positions, m.scene_offset, m.particle_scene, m.edge_pairs,
+                      inputs=[self.edge_ids, m.edge_base, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.ee_count,
                               self.ee_edge, self.min_dist])
             wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
@@ -189,17 +199,16 @@ class SolverVBD:
             for s in range(c.substeps):
                 a1 = (s + 1) / c.substeps
                 wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / c.substeps,
-                                                          m.scene_offset, m.body_vert_scene, self.body_prev_sub,
-                                                          self.body_shifted])
-                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1,
-                                                          m.scene_offset, m.body_vert_scene, self.body_sub,
-                                                          self.body_shifted])
-                self.body_mesh.refit()
+                                                          self.body_prev_sub])
+                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1, self.body_sub])
+                for mesh in self.body_meshes:
+                    mesh.refit()
                 wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
                                                      c.air_drag, h, self.x_prev, self.y, state.pinned_target])
-                wp.launch(K.detect_body, n, inputs=[self.body_mesh.id, self.x_prev, m.scene_offset, m.particle_scene,
+                wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, self.x_prev, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
-                                                    self.body_radius, m.active, self.y, self.body_has, self.body_point, self.body_normal, self.body_disp])
+                                                    self.body_radius, m.active, self.y, self.body_has, self.body_point,
+                                                    self.body_normal, self.body_disp])
                 wp.copy(self.x_det, self.x_prev)
                 self._detect_self()
                 wp.launch(K.initial_guess, n, inputs=[self.x_det, self.y, self.bound, m.active, x])

@@ -1,0 +1,1 @@
+"""The cloth simulator: physics checks against analytic answers."""

@@ -1,0 +1,458 @@
+"""Physics of the cloth solver (``datagen.sim``) against analytic answers, on the CPU.
+
+Every scene is small (at most a few hundred vertices, at most 2.5 s of simulated time) so that the
+whole file runs in a few minutes on one core. Each test prints its measured figures (run pytest
+with ``-s`` to see them). Y is up everywhere.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from datagen.garment.materials import Material
+from datagen.sim.model import ClothModelBuilder
+from datagen.sim.solver import SolverConfig, SolverVBD
+from datagen.sim.state import BodyControl, ClothState
+
+G = 9.81
+FPS = 30
+DT = 1.0 / FPS
+MARGIN = SolverConfig().body_margin  # body contact distance = material thickness + this
+
+# a cotton-like material whose friction coefficient we choose
+COTTON = Material(name="cotton-test", density=0.13, stretch_warp=1800.0, stretch_weft=1200.0, shear=60.0,
+                  poisson=0.3, bending=1.2e-5, friction=0.45, thickness=0.0015)
+
+
+# --------------------------------------------------------------------------------------------------
+# helpers
+
+
+def grid(nx: int, nz: int, dx: float, *, y: float = 0.0, centre=(0.0, 0.0)):
+    """A flat nx x nz vertex grid of spacing dx in the plane y = const, centred on (x, z) = centre,
+    two triangles per cell with normals +Y."""
+    xs = centre[0] + (np.arange(nx) - (nx - 1) / 2) * dx
+    zs = centre[1] + (np.arange(nz) - (nz - 1) / 2) * dx
+    X, Z = np.meshgrid(xs, zs, indexing="ij")
+    v = np.stack([X.ravel(), np.full(X.size, float(y)), Z.ravel()], 1)
+    faces = []
+    for i in range(nx - 1):
+        for j in range(nz - 1):
+            a, b, c, d = i * nz + j, (i + 1) * nz + j, (i + 1) * nz + j + 1, i * nz + j + 1
+            faces += [[a, d, c], [a, c, b]]
+    return v, np.array(faces)
+
+
+def plane(half: float):
+    """A square horizontal plane y = 0 of half-size ``half`` (two triangles, normals +Y)."""
+    v = np.array([[-half, 0.0, -half], [-half, 0.0, half], [half, 0.0, half], [half, 0.0, -half]])
+    return v, np.array([[0, 1, 2], [0, 2, 3]])
+
+
+def rot_z(deg: float) -> np.ndarray:
+    a = np.radians(deg)
+    return np.array([[np.cos(a), -np.sin(a), 0.0], [np.sin(a), np.cos(a), 0.0], [0.0, 0.0, 1.0]])
+
+
+def rot_axis(axis, deg: float) -> np.ndarray:
+    """Rodrigues' rotation matrix about ``axis`` by ``deg`` degrees."""
+    k = np.asarray(axis, dtype=float)
+    k /= np.linalg.norm(k)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    a = np.radians(deg)
+    return np.eye(3) + np.sin(a) * K + (1 - np.cos(a)) * K @ K
+
+
+def simulate(model, config: SolverConfig, frames: int, *, positions=None, on_frame=None):
+    """Run ``frames`` steps of 1/30 s with a static body; ``on_frame(k, x, v)`` after each step.
+    Returns the final positions and velocities (numpy copies)."""
+    s0 = ClothState.from_model(model, positions)
+    s1 = ClothState.from_model(model, positions)
+    control = BodyControl.from_numpy(model, model.host["body_rest"])
+    solver = SolverVBD(model, config)
+    for k in range(frames):
+        solver.step(s0, s1, control, DT)
+        s0, s1 = s1, s0
+        if on_frame is not None:
+            x, v = s0.numpy()
+            on_frame(k, x.copy(), v.copy())
+    x, v = s0.numpy()
+    return x.astype(np.float64), v.astype(np.float64)
+
+
+def build(cloth, *, material=COTTON, body=None, pinned=None, frames=None):
+    b = ClothModelBuilder()
+    b.add_cloth(cloth[0], cloth[1], material_name=material, pinned=pinned, material_frames=frames)
+    if body is not None:
+        b.add_body(body[0], body[1])
+    return b.finalize("cpu")
+
+
+@pytest.fixture(scope="module")
+def icosphere():
+    """A closed icosphere of radius 0.2 m centred at the origin (642 vertices: its flat facets lie
+    at most 0.9 mm inside the true sphere, less than the 3.5 mm contact distance of COTTON)."""
+    import trimesh
+
+    s = trimesh.creation.icosphere(subdivisions=3, radius=0.2)
+    return np.asarray(s.vertices, dtype=np.float64), np.asarray(s.faces, dtype=np.int64)
+
+
+# --------------------------------------------------------------------------------------------------
+# free fall
+
+
+def test_free_fall_matches_implicit_euler_and_ballistics():
+    """A free cloth (no body, no air drag) falls like a point mass.
+
+    Implicit Euler with h = dt/substeps gives, after n substeps, the drop g h² n(n+1)/2 and the
+    speed g n h exactly (membrane, bending and self-contacts exert no force on a rigidly moving
+    rest shape). Against the ballistic g t²/2 the scheme is first order: the difference is exactly
+    g h t/2 (here 1.6 cm after 1 s), so |drop - g t²/2| <= g h t/2 up to float rounding.
+    """
+    config = SolverConfig(air_drag=0.0, self_collision=True)
+    v0, f = grid(3, 3, 0.05, y=0.0)
+    x, v = simulate(build((v0, f)), config, FPS)
+    n = config.substeps * FPS
+    h = DT / config.substeps
+    t = n * h
+    drop = -(x[:, 1] - v0[:, 1])
+    euler = G * h * h * n * (n + 1) / 2
+    ballistic = G * t * t / 2
+    print(f"\nfree fall 1 s: drop {drop.min():.6f}..{drop.max():.6f} m, implicit Euler {euler:.6f} m, "
+          f"g t²/2 {ballistic:.6f} m (first-order bound {G * h * t / 2:.6f} m); speed {-v[:, 1].mean():.6f} m/s")
+    assert np.all(np.abs(drop - ballistic) <= G * h * t / 2 + 1e-4 * ballistic)
+    np.testing.assert_allclose(drop, euler, rtol=1e-4)
+    np.testing.assert_allclose(-v[:, 1], G * t, rtol=1e-4)
+    # no horizontal motion beyond float32 noise: at y ≈ -5 m a coordinate is only resolved to
+    # 4.8e-7 m, which on 5 cm edges is a spurious strain of ~1e-5 that the membrane answers
+    print(f"free fall: horizontal drift {np.abs(x[:, [0, 2]] - v0[:, [0, 2]]).max():.2e} m, "
+          f"horizontal speed {np.abs(v[:, [0, 2]]).max():.2e} m/s")
+    assert np.abs(x[:, [0, 2]] - v0[:, [0, 2]]).max() < 1e-4
+    assert np.abs(v[:, [0, 2]]).max() < 1e-3
+
+
+# --------------------------------------------------------------------------------------------------
+# hanging strip (static equilibrium of the orthotropic StVK membrane)
+
+STRIP_MATERIAL = Material(name="strip", density=0.18, stretch_warp=60.0, stretch_weft=60.0, shear=15.0, poisson=0.0,
+                          bending=1e-7, friction=0.0, thickness=0.0015, damping=0.002)
+STRIP_SECONDS = 2.5  # oscillations have died out to < 1 % by 2 s (5 s gives the same answer)
+STRIP_WINDOW = 15  # frames averaged at the end (the last 0.5 s)
+
+
+def stvk_strip_elongation(k: float, rho: float, length: float) -> float:
+    """Exact elongation of a hanging StVK strip: at reference distance s from the free end the
+    stretch λ solves the 1D stress balance k λ(λ² - 1)/2 = ρ g s (Green strain (λ²-1)/2, first
+    Piola-Kirchhoff stress k E λ), and the elongation is ∫₀ᴸ (λ(s) - 1) ds."""
+    from scipy.optimize import brentq
+
+    s = np.linspace(0.0, length, 4001)
+    lam = [1.0 if q == 0 else brentq(lambda L, q=q: k * L * (L * L - 1) / 2 - rho * G * q, 1.0, 3.0) for q in s]
+    return float(np.trapezoid(np.array(lam) - 1.0, s))
+
+
+def run_strip(iterations: int):
+    """A 0.1 m x 1.0 m strip (2 cm grid, 6 x 51 vertices) hanging from its pinned top row, warp
+    along Y; returns the bottom row's elongation [m] at every frame."""
+    nx, ny, dx = 6, 51, 0.02
+    X, Y = np.meshgrid(np.arange(nx) * dx, -np.arange(ny) * dx, indexing="ij")
+    v = np.stack([X.ravel(), Y.ravel(), np.zeros(X.size)], 1)
+    faces = []
+    for i in range(nx - 1):
+        for j in range(ny - 1):
+            a, b, c, d = i * ny + j, (i + 1) * ny + j, (i + 1) * ny + j + 1, i * ny + j + 1
+            faces += [[a, b, c], [a, c, d]]
+    f = np.array(faces)
+    top = np.flatnonzero(np.isclose(v[:, 1], 0.0))
+    bottom = np.flatnonzero(np.isclose(v[:, 1], -1.0))
+    frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), (len(f), 1, 1))  # weft X, warp Y
+    model = build((v, f), material=STRIP_MATERIAL, pinned=top, frames=frames)
+    elong = []
+    simulate(model, SolverConfig(substeps=10, iterations=iterations, self_collision=False), int(STRIP_SECONDS * FPS),
+             on_frame=lambda k, x, _v: elong.append(-x[bottom, 1].mean() - 1.0))
+    return np.array(elong)
+
+
+@pytest.fixture(scope="module")
+def strip_exact():
+    return stvk_strip_elongation(STRIP_MATERIAL.stretch_warp, STRIP_MATERIAL.density, 1.0)
+
+
+@pytest.fixture(scope="module")
+def strip_30():
+    return run_strip(30)
+
+
+def test_hanging_strip_matches_stvk(strip_30, strip_exact):
+    """The bottom of a 1 m strip of k = 60 N/m, ρ = 0.18 kg/m² hangs lower by the exact StVK
+    elongation ∫(λ-1)ds = 14.31 mm (see :func:`stvk_strip_elongation`), within 5 %, both averaged
+    over the last 0.5 s and in the last frame."""
+    mean = strip_30[-STRIP_WINDOW:].mean()
+    last = strip_30[-1]
+    print(f"\nhanging strip (30 iterations, {STRIP_SECONDS} s): elongation mean of last 0.5 s {mean * 1e3:.3f} mm, "
+          f"last frame {last * 1e3:.3f} mm, range {strip_30[-STRIP_WINDOW:].min() * 1e3:.3f}.."
+          f"{strip_30[-STRIP_WINDOW:].max() * 1e3:.3f} mm; exact StVK {strip_exact * 1e3:.3f} mm; "
+          f"error {100 * (mean - strip_exact) / strip_exact:+.2f} %")
+    assert abs(mean - strip_exact) < 0.05 * strip_exact
+    assert abs(last - strip_exact) < 0.05 * strip_exact
+
+
+def test_hanging_strip_converges_with_iterations(strip_30, strip_exact):
+    """More colour sweeps per substep bring the strip closer to the exact elongation: the error
+    (mean |elongation - exact| over the last 0.5 s) with 30 iterations is smaller than with 5."""
+    strip_5 = run_strip(5)
+    err30 = np.abs(strip_30[-STRIP_WINDOW:] - strip_exact).mean() / strip_exact
+    err5 = np.abs(strip_5[-STRIP_WINDOW:] - strip_exact).mean() / strip_exact
+    print(f"\nhanging strip: relative error 5 iterations {100 * err5:.1f} % (mean elongation "
+          f"{strip_5[-STRIP_WINDOW:].mean() * 1e3:.3f} mm), 30 iterations {100 * err30:.2f} %")
+    assert err30 < err5
+
+
+# --------------------------------------------------------------------------------------------------
+# contact with planes
+
+
+def test_cloth_at_rest_on_a_plane_stays_at_rest():
+    """A flat 12 cm cotton patch lying on a large horizontal plane at exactly the contact distance
+    (thickness + margin) is in equilibrium: over 2 s no vertex drifts by 1 mm, it neither sinks
+    nor lifts off (height = contact distance within 0.1 mm) and its kinetic energy never grows
+    above its value at 0.2 s (no energy gain from the contact)."""
+    r = COTTON.thickness + MARGIN
+    cloth = grid(5, 5, 0.03, y=r)
+    model = build(cloth, body=plane(3.0))
+    mass = model.host["mass"]
+    ke, drift, height = [], [], []
+
+    def on_frame(k, x, v):
+        ke.append(0.5 * float((mass * (v * v).sum(1)).sum()))
+        drift.append(float(np.linalg.norm(x - cloth[0], axis=1).max()))
+        height.append((float(x[:, 1].min()), float(x[:, 1].max())))
+
+    simulate(model, SolverConfig(), 2 * FPS, on_frame=on_frame)
+    ke = np.array(ke)
+    ref = ke[int(0.2 * FPS) - 1]
+    print(f"\nrest on plane 2 s: max drift {max(drift) * 1e3:.4f} mm, height {min(h[0] for h in height) * 1e3:.4f}.."
+          f"{max(h[1] for h in height) * 1e3:.4f} mm (contact distance {r * 1e3:.2f} mm), KE at 0.2 s {ref:.3e} J, "
+          f"max later {ke[int(0.2 * FPS):].max():.3e} J, final {ke[-1]:.3e} J")
+    assert max(drift) < 1e-3
+    assert all(abs(lo - r) < 1e-4 and abs(hi - r) < 1e-4 for lo, hi in height)
+    assert ke[int(0.2 * FPS):].max() <= ref * 1.01 + 1e-12
+
+
+@pytest.mark.xfail(strict=True, reason="known solver bug (docs/simulator.md): the friction's normal force is the "
+                   "current penalty force of the iterate, not lagged, so the patch sticks at 35 deg and creeps uphill")
+@pytest.mark.parametrize("angle", [20.0, 35.0])
+def test_patch_on_tilted_plane_obeys_coulomb_friction(angle):
+    """A 12 cm patch (friction μ = 0.5) starts at rest on a plane tilted by ``angle``, parallel to
+    it at the contact distance. Coulomb: it sticks when tan a < μ (20°: tan = 0.36) and moves less
+    than 3 mm in 1 s (the friction model creeps below ε_v = 1 mm/s); when tan a > μ (35°: tan =
+    0.70) it slides with acceleration g (sin a - μ cos a), i.e. 0.80 m in 1 s: it must move more
+    than 10 cm and stay closer to this than to frictionless sliding (g sin a t²/2 = 2.81 m). In
+    neither case may it move uphill (friction only opposes motion)."""
+    mu = 0.5
+    material = Material(name="rough", density=0.13, stretch_warp=1800.0, stretch_weft=1200.0, shear=60.0,
+                        poisson=0.3, bending=1.2e-5, friction=mu, thickness=0.0015)
+    r = material.thickness + MARGIN
+    R = rot_z(angle)
+    v0, f = grid(5, 5, 0.03, y=r)
+    pv, pf = plane(3.0)
+    x0 = v0 @ R.T
+    model = build((x0, f), material=material, body=(pv @ R.T, pf))
+    x, _ = simulate(model, SolverConfig(), FPS)
+    downhill = R @ np.array([-1.0, 0.0, 0.0])  # tangential component of gravity points here
+    normal = R @ np.array([0.0, 1.0, 0.0])
+    slide = float((x - x0).mean(0) @ downhill)
+    height = x @ normal
+    a = np.radians(angle)
+    coulomb = G * max(0.0, np.sin(a) - mu * np.cos(a)) / 2
+    frictionless = G * np.sin(a) / 2
+    print(f"\ntilted plane {angle:.0f}° μ={mu}: moved {slide * 1e3:.2f} mm downhill in 1 s (Coulomb "
+          f"{coulomb * 1e3:.1f} mm, frictionless {frictionless * 1e3:.1f} mm); height above plane "
+          f"{height.min() * 1e3:.3f}..{height.max() * 1e3:.3f} mm")
+    assert np.all(np.abs(height - r) < 5e-4)  # stays on the plane
+    assert slide > -1e-4  # friction only opposes motion: a patch at rest never climbs
+    if np.tan(a) < mu:
+        assert np.linalg.norm(x - x0, axis=1).max() < 3e-3
+    else:
+        assert slide > 0.10
+        assert slide < (coulomb + frictionless) / 2
+
+
+# --------------------------------------------------------------------------------------------------
+# invariance, determinism, batches
+
+
+def draped_on_plane(R=None, t=None, perturb: float = 0.0):
+    """A 30 cm wavy patch falling 1-3 cm onto a large plane for 0.5 s, all rotated by R and moved
+    by t (gravity rotated too); returns the final positions mapped back to the original frame."""
+    R = np.eye(3) if R is None else R
+    t = np.zeros(3) if t is None else t
+    v, f = grid(13, 13, 0.025, y=0.02, centre=(0.013, -0.007))
+    v[:, 1] += 0.01 * np.sin(20 * v[:, 0])
+    v[:, 0] += perturb * np.sin(np.arange(len(v)))
+    pv, pf = plane(1.0)
+    model = build((v @ R.T + t, f), body=(pv @ R.T + t, pf))
+    x, _ = simulate(model, SolverConfig(gravity=tuple(R @ np.array([0.0, -G, 0.0]))), FPS // 2)
+    return (x - t) @ R
+
+
+@pytest.mark.xfail(strict=True, reason="known solver weakness (docs/simulator.md): Chebyshev acceleration at "
+                   "rho 0.9 amplifies float32 rounding to 1.1e-4 m (6.8e-6 m with rho 0)")
+def test_rigid_motion_invariance():
+    """Physics does not depend on where the scene is or how it is oriented: the same drape
+    translated by (0.3, -0.2, 0.5) m and rotated by 40° about (1, 2, 3), with gravity rotated
+    with it, maps back onto the original within 1e-4 m (float32 rounding only)."""
+    base = draped_on_plane()
+    moved = draped_on_plane(rot_axis([1, 2, 3], 40.0), np.array([0.3, -0.2, 0.5]))
+    diff = np.linalg.norm(moved - base, axis=1)
+    # for the diagnosis only: how much a 1 µm change of the start amplifies in the same scene
+    sens = np.linalg.norm(draped_on_plane(perturb=1e-6) - base, axis=1).max()
+    print(f"\nrigid invariance (plane, 0.5 s): max {diff.max():.3e} m, mean {diff.mean():.3e} m; "
+          f"a 1e-6 m perturbation of the start moves the result by {sens:.3e} m")
+    assert diff.max() < 1e-4
+
+
+def sphere_scene(builder: ClothModelBuilder, icosphere, scene: int) -> int:
+    v, f = grid(13, 13, 0.025, y=0.21, centre=(0.013, -0.007))
+    first = builder.add_cloth(v, f, material_name=COTTON, scene=scene)
+    builder.add_body(*icosphere, scene=scene)
+    return first
+
+
+def test_repeat_runs_are_identical(icosphere):
+    """Two independent builds and solvers of the same scene (a patch dropped onto a sphere, with
+    body and self contacts) give the same positions to 1e-6 m."""
+    runs = []
+    for _ in range(2):
+        b = ClothModelBuilder()
+        sphere_scene(b, icosphere, 0)
+        runs.append(simulate(b.finalize("cpu"), SolverConfig(), FPS // 2)[0])
+    diff = np.abs(runs[0] - runs[1]).max()
+    print(f"\nrepeat runs: max difference {diff:.3e} m")
+    assert diff < 1e-6
+
+
+@pytest.mark.parametrize("position", [0, 1])
+def test_batch_scenes_are_independent(icosphere, position):
+    """A scene simulated alone and the same scene in a batch with another scene (a different cloth
+    on its own plane body) give the same positions to 1e-6 m, whether it is scene 0 or scene 1."""
+    b = ClothModelBuilder()
+    sphere_scene(b, icosphere, 0)
+    alone = simulate(b.finalize("cpu"), SolverConfig(), FPS // 2)[0]
+
+    b = ClothModelBuilder()
+    other = 1 - position
+    ov, of = grid(9, 9, 0.03, y=0.05)
+    if position == 0:
+        first = sphere_scene(b, icosphere, 0)
+        b.add_cloth(ov, of, material_name="denim", scene=other)
+    else:
+        b.add_cloth(ov, of, material_name="denim", scene=other)
+        first = sphere_scene(b, icosphere, 1)
+    b.add_body(*plane(1.0), scene=other)
+    model = b.finalize("cpu")
+    x = simulate(model, SolverConfig(), FPS // 2)[0][first:first + len(alone)]
+    diff = np.linalg.norm(x - alone, axis=1).max()
+    print(f"\nbatch independence (as scene {position}): max difference {diff:.3e} m")
+    assert diff < 1e-6
+
+
+# --------------------------------------------------------------------------------------------------
+# collisions
+
+
+def test_cloth_dropped_on_sphere_stays_outside(icosphere):
+    """A 50 cm cotton square dropped onto a sphere of radius 0.2 m drapes over it; after 1.5 s no
+    vertex is inside the sphere (|x| >= 0.2 m) and the cloth rests on it (nearest vertex within
+    1 cm of the surface). Penetration during the impact is printed, not asserted."""
+    cloth = grid(21, 21, 0.025, y=0.21)
+    model = build(cloth, body=icosphere)
+    inside, closest = [], []
+
+    def on_frame(k, x, v):
+        d = np.linalg.norm(x, axis=1)
+        inside.append(int((d < 0.2).sum()))
+        closest.append(float(d.min()))
+
+    x, v = simulate(model, SolverConfig(), int(1.5 * FPS), on_frame=on_frame)
+    dist = np.linalg.norm(x, axis=1)
+    worst = int(np.argmin(closest))
+    print(f"\nsphere drop 1.5 s: min distance from centre {dist.min():.5f} m (radius 0.2), vertices inside at "
+          f"the end {int((dist < 0.2).sum())}; during the run: most inside in one frame {max(inside)}, closest "
+          f"{min(closest):.5f} m at frame {worst + 1}; lowest vertex y {x[:, 1].min():.3f} m, max speed at the end "
+          f"{np.linalg.norm(v, axis=1).max():.3f} m/s")
+    assert (dist < 0.2).sum() == 0
+    assert dist.min() < 0.21
+
+
+def small_sphere_scene():
+    """A 60 cm cotton square (25 x 25 vertices) held at its centre vertex on top of a sphere of
+    radius 0.1 m, around which it falls. Returns (model, rest positions, faces)."""
+    import trimesh
+
+    s = trimesh.creation.icosphere(subdivisions=3, radius=0.1)
+    v0, f = grid(25, 25, 0.025, y=0.105)
+    centre = [int(np.argmin(np.linalg.norm(v0[:, [0, 2]], axis=1)))]
+    model = build((v0, f), body=(np.asarray(s.vertices), np.asarray(s.faces)), pinned=centre)
+    return model, v0, f
+
+
+@pytest.mark.parametrize("self_collision", [pytest.param(False, marks=pytest.mark.xfail(
+    strict=True, reason="known solver bug (docs/simulator.md): Chebyshev acceleration without the self-collision "
+    "move bounds is unstable")), True])
+def test_kinetic_energy_never_exceeds_released_potential_energy(self_collision):
+    """Energy balance of a dissipative system: gravity is the only source of energy (the body and
+    the pinned vertex are static), so at every frame the kinetic energy is at most the potential
+    energy released, Σ m g (y₀ - y). Checked for 1 s of a cloth falling around a small sphere,
+    with and without self-collision (default solver settings otherwise)."""
+    model, v0, _f = small_sphere_scene()
+    mass = model.host["mass"]
+    ke, released = [], []
+
+    def on_frame(k, x, v):
+        ke.append(0.5 * float((mass * (v * v).sum(1)).sum()))
+        released.append(G * float((mass * (v0[:, 1] - x[:, 1])).sum()))
+
+    simulate(model, SolverConfig(self_collision=self_collision), FPS, on_frame=on_frame)
+    ke, released = np.array(ke), np.array(released)
+    worst = int(np.argmax(ke - released))
+    print(f"\nenergy (self_collision={self_collision}): max KE {ke.max() * 1e3:.2f} mJ at frame "
+          f"{int(np.argmax(ke)) + 1}; largest KE - released PE {(ke - released)[worst] * 1e3:+.2f} mJ at frame "
+          f"{worst + 1} (KE {ke[worst] * 1e3:.2f} mJ, released {released[worst] * 1e3:.2f} mJ); final KE "
+          f"{ke[-1] * 1e3:.2f} mJ")
+    assert np.all(ke <= released + 1e-6)
+
+
+@pytest.mark.parametrize("substeps", [pytest.param(10, marks=pytest.mark.xfail(
+    strict=True, reason="known limit (docs/simulator.md): the sheet's corners whip at 8.9 m/s, beyond what the "
+    "1 cm search covers at 10 substeps (1.8 m/s)")), 20])
+def test_cloth_folding_on_itself_does_not_self_intersect(substeps):
+    """A 60 cm cotton square held at its centre on top of a small sphere (radius 0.1 m) falls
+    around it and folds onto itself (vertex pairs more than 6 cm apart in the rest shape come
+    within 1 cm of each other); after 1 s no triangle intersects another (pymeshlab). With 10
+    substeps the corners whip to ~3-4 m/s, above the 1.8 m/s that the kernels' conservative bounds
+    are documented to handle; with 20 substeps that limit is 3.6 m/s."""
+    from scipy.spatial import cKDTree
+
+    from datagen.garment.checks import self_intersections
+
+    model, v0, f = small_sphere_scene()
+    speed, folded, history = [], [], []
+
+    def on_frame(k, x, v):
+        speed.append(float(np.linalg.norm(v, axis=1).max()))
+        pairs = np.array(sorted(cKDTree(x).query_pairs(0.01)))
+        folded.append(0 if len(pairs) == 0 else
+                      int((np.linalg.norm(v0[pairs[:, 0]] - v0[pairs[:, 1]], axis=1) > 0.06).sum()))
+        if (k + 1) % 6 == 0:
+            history.append(self_intersections(x.astype(np.float64), f))
+
+    x, _v = simulate(model, SolverConfig(substeps=substeps), FPS, on_frame=on_frame)
+    bad = self_intersections(x, f)
+    print(f"\nself-collision ({substeps} substeps): up to {max(folded)} vertex pairs > 6 cm apart at rest came "
+          f"within 1 cm; intersecting faces every 0.2 s {history}, at the end {bad} of {len(f)}; max vertex "
+          f"speed {max(speed):.2f} m/s")
+    assert max(folded) > 0, "the scene no longer folds the cloth onto itself"
+    assert bad == 0
