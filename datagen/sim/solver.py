@@ -54,7 +54,7 @@ class SolverConfig:
     self_query: float = 0.01
     friction_velocity: float = 1.0e-3
     contact_capacity: int = 16
-    chebyshev_rho: float = 0.9
+    chebyshev_rho: float = 0.7
     detection_interval: int = 3
 
     def __post_init__(self):
