@@ -33,6 +33,7 @@ from __future__ import annotations
 import warp as wp
 
 BIG = 1.0e9
+BODY_FRICTION_IN_SOLVE = wp.constant(0.0)
 
 
 @wp.func
@@ -86,16 +87,20 @@ def are_neighbours(a: int, b: int, nbr_offsets: wp.array(dtype=wp.int32), nbr: w
 
 @wp.func
 def contact_force_hessian(dx_rel: wp.vec3, n: wp.vec3, depth: float, k: float, mu: float, eps_u: float,
-                          weight: float):
-    """Force and Hessian on one vertex of a penalty contact ``k/2 depth²`` along n with lagged
-    Coulomb friction; ``weight`` is the vertex's share (barycentric weight, signed)."""
+                          weight: float, lam_friction: float):
+    """Force and Hessian on one vertex of a penalty contact ``k/2 depth²`` along n with Coulomb
+    friction ``mu * lam_friction`` (the normal force lagged from the end of the last substep;
+    negative: the current penalty force); ``weight`` is the vertex's share (barycentric weight)."""
     lam = k * depth
     f = n * (lam * weight)
     h = wp.outer(n, n) * (k * weight * weight)
-    if mu > 0.0:
+    lam_f = lam
+    if lam_friction >= 0.0:
+        lam_f = lam_friction
+    if mu > 0.0 and lam_f > 0.0:
         t = dx_rel - n * wp.dot(n, dx_rel)
         ut = wp.length(t)
-        scale = mu * lam * wp.abs(weight) / wp.max(ut, eps_u)
+        scale = mu * lam_f * wp.abs(weight) / wp.max(ut, eps_u)
         f = f - t * scale
         h = h + (wp.identity(n=3, dtype=float) - wp.outer(n, n)) * scale
     return f, h
@@ -105,8 +110,15 @@ def contact_force_hessian(dx_rel: wp.vec3, n: wp.vec3, depth: float, k: float, m
 def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
                  area: wp.array(dtype=float), active: wp.array(dtype=wp.int32), gravity: wp.vec3, air_drag: float,
                  h: float, x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtype=wp.vec3),
-                 pinned_target: wp.array(dtype=wp.vec3)):
-    """Save x₀, form the inertial target y; pinned vertices move to their target."""
+                 pinned_target: wp.array(dtype=wp.vec3), body_has: wp.array(dtype=wp.int32),
+                 body_normal: wp.array(dtype=wp.vec3), body_disp: wp.array(dtype=wp.vec3),
+                 body_lambda: wp.array(dtype=float), friction: wp.array(dtype=float)):
+    """Save x₀, form the inertial target y; pinned vertices move to their target.
+
+    A vertex that the body pushed at the end of the last substep (normal force λ) loses up to
+    μ λ h / m of its predicted tangential velocity relative to the body (Coulomb friction on the
+    velocity, static when the whole of it is taken), so the whole cloth, not vertex by vertex,
+    feels the friction; the solve adds friction against the forces that arise within it."""
     i = wp.tid()
     x_prev[i] = x[i]
     if active[i] == 0:
@@ -115,7 +127,21 @@ def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: w
     a = gravity
     if mass[i] > 0.0:
         a = a - v[i] * (air_drag * area[i] / mass[i])
-    inertia_target[i] = x[i] + v[i] * h + a * (h * h)
+    vi = v[i] + a * h  # the predicted velocity: y = x + h (v + h a)
+    if mass[i] > 0.0 and body_has[i] == 1 and body_lambda[i] > 0.0:
+        n = body_normal[i]
+        vb = body_disp[i] / h
+        rel = vi - vb
+        vn = n * wp.dot(rel, n)
+        vt = rel - vn
+        lt = wp.length(vt)
+        dv = friction[i] * body_lambda[i] * h / mass[i]
+        if lt <= dv:
+            vt = wp.vec3(0.0)
+        else:
+            vt = vt * (1.0 - dv / lt)
+        vi = vb + vn + vt
+    inertia_target[i] = x[i] + vi * h
 
 
 @wp.kernel
@@ -476,6 +502,7 @@ def solve_colour(
     body_normal: wp.array(dtype=wp.vec3),
     body_disp: wp.array(dtype=wp.vec3),
     body_radius: wp.array(dtype=float),
+    body_lambda: wp.array(dtype=float),
     body_k: float,
     vt_count: wp.array(dtype=wp.int32),
     vt_tri: wp.array2d(dtype=wp.int32),
@@ -535,7 +562,7 @@ def solve_colour(
                         we = es
                     rel = ((x[a] - x_prev[a]) * (1.0 - es) + (x[b] - x_prev[b]) * es) - (
                         (x[c] - x_prev[c]) * (1.0 - et) + (x[d] - x_prev[d]) * et)
-                    fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, we)
+                    fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, we, -1.0)
                     force += fc
                     hess += hc
     # vertex-triangle contacts with i as the vertex
@@ -550,7 +577,7 @@ def solve_colour(
         if dist < self_radius and dist > 1.0e-9:
             n = (xi - p) / dist
             rel = (xi - x_prev[i]) - ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2])
-            fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, 1.0)
+            fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, 1.0, -1.0)
             force += fc
             hess += hc
     # vertex-triangle contacts with i as a corner of the triangle
@@ -569,7 +596,7 @@ def solve_colour(
                 n = (p - x[j]) / dist
                 rel = ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2]) - (
                     x[j] - x_prev[j])
-                fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local])
+                fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local], -1.0)
                 force += fc
                 hess += hc
     # the body
@@ -579,7 +606,8 @@ def solve_colour(
         r = body_radius[i]
         if dist < r:
             rel = (xi - x_prev[i]) - body_disp[i]
-            fc, hc = contact_force_hessian(rel, n, r - dist, body_k, friction[i], eps_u, 1.0)
+            fc, hc = contact_force_hessian(rel, n, r - dist, body_k, friction[i] * BODY_FRICTION_IN_SOLVE, eps_u, 1.0,
+                                           body_lambda[i])
             force += fc
             hess += hc
     if wp.abs(wp.determinant(hess)) < 1.0e-20:
@@ -625,3 +653,17 @@ def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2:
         x[i] = xi
     x_nm2[i] = x_nm1[i]
     x_nm1[i] = xi
+
+
+@wp.kernel
+def body_contact_force(x: wp.array(dtype=wp.vec3), has: wp.array(dtype=wp.int32), point: wp.array(dtype=wp.vec3),
+                       normal: wp.array(dtype=wp.vec3), radius: wp.array(dtype=float), k: float,
+                       lam: wp.array(dtype=float)):
+    """The body's normal force on each vertex at the end of a substep: the next substep's friction
+    normal force (lagged, as in IPC), so friction does not depend on the iterate's penetration."""
+    i = wp.tid()
+    lam[i] = 0.0
+    if has[i] == 1:
+        d = wp.dot(x[i] - point[i], normal[i])
+        if d < radius[i]:
+            lam[i] = k * (radius[i] - d)

@@ -88,6 +88,7 @@ class SolverVBD:
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
+            self.body_lambda = wp.zeros(n, dtype=float)
             self.body_has = wp.zeros(n, dtype=wp.int32)
             self.body_point, self.body_normal, self.body_disp = z3(n), z3(n), z3(n)
             self.body_radius = wp.array(m.host["thickness"].astype(np.float32) + self.config.body_margin, dtype=float)
@@ -204,7 +205,9 @@ class SolverVBD:
                 for mesh in self.body_meshes:
                     mesh.refit()
                 wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
-                                                     c.air_drag, h, self.x_prev, self.y, state.pinned_target])
+                                                     c.air_drag, h, self.x_prev, self.y, state.pinned_target,
+                                                     self.body_has, self.body_normal, self.body_disp, self.body_lambda,
+                                                     m.friction])
                 wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, self.x_prev, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
                                                     self.body_radius, m.active, self.y, self.body_has, self.body_point,
@@ -227,7 +230,7 @@ class SolverVBD:
                             m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.rest_angle, m.bend_k,
                             m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
                             self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
-                            c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
+                            self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
                             self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
                             c.friction_velocity * h, h, self.x_tmp])
                         wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
@@ -235,5 +238,7 @@ class SolverVBD:
                     cheb += 1
                     wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
                                                       omega])
+                wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
+                                                           self.body_radius, c.body_stiffness, self.body_lambda])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
         return int(self.needed.numpy().max()) if c.self_collision else 0

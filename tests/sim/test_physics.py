@@ -245,9 +245,7 @@ def test_cloth_at_rest_on_a_plane_stays_at_rest():
     assert ke[int(0.2 * FPS):].max() <= ref * 1.01 + 1e-12
 
 
-@pytest.mark.parametrize("angle", [20.0, pytest.param(35.0, marks=pytest.mark.xfail(
-    strict=True, reason="known solver bug (docs/simulator.md): the friction's normal force is the current penalty "
-    "force of the iterate, not lagged, so the patch sticks at 35 deg"))])
+@pytest.mark.parametrize("angle", [20.0, 35.0])
 def test_patch_on_tilted_plane_obeys_coulomb_friction(angle):
     """A 12 cm patch (friction μ = 0.5) starts at rest on a plane tilted by ``angle``, parallel to
     it at the contact distance. Coulomb: it sticks when tan a < μ (20°: tan = 0.36) and moves less
