@@ -155,6 +155,21 @@ def test_file_garment_units_and_up_axis_guessed(garments, tmp_path):
     assert len(back.loops) == 2
 
 
+def test_file_garment_from_gltf(garments, tmp_path):
+    """A binary glTF (metres, Y up, as the format prescribes) reads back through trimesh unchanged."""
+    import trimesh
+
+    from datagen.garment.files import load_garment_file
+
+    g = garments["skirt"]
+    trimesh.Trimesh(g.vertices, g.faces, process=False).export(tmp_path / "skirt.glb")
+    back = load_garment_file(tmp_path / "skirt.glb")
+    assert back.metadata["units"] == "m" and back.metadata["up_axis"] == "y"
+    np.testing.assert_allclose(back.vertices, g.vertices, atol=1e-6)
+    np.testing.assert_array_equal(back.faces, g.faces)
+    assert len(back.loops) == 2
+
+
 def test_file_garment_refuses_what_cannot_be_simulated(tmp_path):
     import trimesh
 
