@@ -169,6 +169,18 @@ def largest_component(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarr
     return np.asarray(best.vertices), np.asarray(best.faces)
 
 
+def split_pinched_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Split every vertex where two fans of triangles meet (a boundary touching itself at a point,
+    which a cut can leave), each copy moved a tenth of an edge into its own fan (pymeshlab)."""
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32)))
+    ms.meshing_repair_non_manifold_vertices(vertdispratio=0.1)
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)
+
+
 def remesh(vertices: np.ndarray, faces: np.ndarray, edge_length: float, iterations: int = 8) -> tuple[np.ndarray, np.ndarray]:
     """Isotropic explicit remeshing (pymeshlab) to ``edge_length`` (m), boundaries kept."""
     import pymeshlab
