@@ -66,6 +66,18 @@ def test_other_bodies(default_body, body, kinds):
         assert c["ok"], (body, kind, c["failures"])
 
 
+def test_open_front_cut_that_pinches_the_boundary_is_split(default_body):
+    """Coat seed 19 on the thin body: the cut of the open front leaves the boundary touching itself
+    at one vertex; the vertex is split, so the coat has its three openings and passes every check."""
+    from datagen.body.shapes import resolve_betas
+
+    betas = resolve_betas(default_body, body="thin")[0]
+    g = make_garment("coat", default_body, betas, seed=19)
+    assert set(g.loops) == set(LOOP_NAMES["coat"].split())
+    c = check_garment(g, np.asarray(default_body.shaped(betas))[0], default_body.faces)
+    assert c["ok"], c["failures"]
+
+
 def test_long_top_on_thin_body_keeps_one_hem(default_body):
     from datagen.body.shapes import resolve_betas
 
