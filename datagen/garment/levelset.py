@@ -169,6 +169,18 @@ def largest_component(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarr
     return np.asarray(best.vertices), np.asarray(best.faces)
 
 
+def close_small_holes(vertices: np.ndarray, faces: np.ndarray, max_edges: int) -> tuple[np.ndarray, np.ndarray]:
+    """Fill holes bounded by at most ``max_edges`` edges (pymeshlab), the pin-holes a cut can leave
+    where its field only grazes the surface; every opening of a garment is far longer."""
+    import pymeshlab
+
+    ms = pymeshlab.MeshSet()
+    ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32)))
+    ms.meshing_close_holes(maxholesize=int(max_edges), selfintersection=False)
+    m = ms.current_mesh()
+    return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)
+
+
 def split_pinched_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Split every vertex where two fans of triangles meet (a boundary touching itself at a point,
     which a cut can leave), each copy moved a tenth of an edge into its own fan (pymeshlab)."""

@@ -192,6 +192,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     v, f = levelset.remesh(v, f, target_edge_length, iterations=5)
     v, f = levelset.largest_component(v, f)
     v, f = levelset.split_pinched_vertices(v, f)
+    v, f = levelset.close_small_holes(v, f, 8)
     region_names, vertex_region, chart = regions(v)
     uv, face_uv, wrap_seam = _panel_uvs(v, f, vertex_region, region_names, chart)
     seconds = time.perf_counter() - t0
