@@ -68,12 +68,7 @@ class ClothModelBuilder:
     def add_body(self, vertices, faces, *, scene: int = 0) -> None:
         """The collider of ``scene``: a closed triangle mesh with outward normals; ``vertices`` is
         its start pose [m] (each frame's pose comes in a :class:`~datagen.sim.state.BodyControl`)."""
-        v = np.asarray(vertices, dtype=np.float64)
-        f = np.asarray(faces, dtype=np.int64)
-        if v.ndim != 2 or v.shape[1] != 3 or not np.isfinite(v).all():
-            raise InputError(f"body vertices must be finite and of shape [V, 3], got {v.shape}")
-        if f.ndim != 2 or f.shape[1] != 3 or f.min() < 0 or f.max() >= len(v):
-            raise InputError(f"body faces must be [F, 3] indices into {len(v)} vertices")
+        v, f = _checked_mesh(vertices, faces, "body")
         if scene in self._bodies:
             raise InputError(f"scene {scene} already has a body")
         self._bodies[int(scene)] = (v, f)
@@ -91,12 +86,7 @@ class ClothModelBuilder:
                 without them the first edge of each face is the weft.
             pinned: indices of vertices held at their targets (tests: a hanging strip).
         """
-        v = np.asarray(vertices, dtype=np.float64)
-        f = np.asarray(faces, dtype=np.int64)
-        if v.ndim != 2 or v.shape[1] != 3 or not np.isfinite(v).all():
-            raise InputError(f"cloth vertices must be finite and of shape [V, 3], got {v.shape}")
-        if f.ndim != 2 or f.shape[1] != 3 or f.min() < 0 or f.max() >= len(v):
-            raise InputError(f"cloth faces must be [F, 3] indices into {len(v)} vertices")
+        v, f = _checked_mesh(vertices, faces, "cloth")
         if scene < 0:
             raise InputError(f"scene index must be >= 0, got {scene}")
         first = sum(len(p.vertices) for p in self._parts)
@@ -241,6 +231,17 @@ class ClothModelBuilder:
         for k, a in arr.items():
             object.__setattr__(model, k, a)
         return model
+
+
+def _checked_mesh(vertices, faces, what: str) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices [V, 3] (float64, finite) and faces [F, 3] (int64, in range), or an InputError."""
+    v = np.asarray(vertices, dtype=np.float64)
+    f = np.asarray(faces, dtype=np.int64)
+    if v.ndim != 2 or v.shape[1] != 3 or not np.isfinite(v).all():
+        raise InputError(f"{what} vertices must be finite and of shape [V, 3], got {v.shape}")
+    if f.ndim != 2 or f.shape[1] != 3 or len(f) == 0 or f.min() < 0 or f.max() >= len(v):
+        raise InputError(f"{what} faces must be a non-empty [F, 3] array of indices into {len(v)} vertices")
+    return v, f
 
 
 def _edge_frames(v: np.ndarray, f: np.ndarray) -> np.ndarray:
