@@ -13,6 +13,7 @@ max stretch) of the last frame of scene 0.
 from __future__ import annotations
 
 import argparse
+import pickle
 import time
 
 import numpy as np
@@ -86,6 +87,64 @@ def run(args) -> None:
                   flush=True)
 
 
+def prepare_runs(args) -> None:
+    """Scenes for the long-run check: each garment on the regular body doing each motion."""
+    from datagen.body.cache import default_body
+    from datagen.body.shapes import resolve_betas
+    from datagen.garment.types import make_garment
+    from datagen.motion.library import make_motion
+    from datagen.sim.scene import RunConfig, Scene
+
+    model = default_body()
+    betas = resolve_betas(model, body=args.body)[0]
+    scenes, names = [], []
+    for kind in args.garments.split(","):
+        g = make_garment(kind, model, betas, seed=args.garment_seed)
+        for label in args.motions.split(","):
+            motion = make_motion(label, seed=args.motion_seed, frames=args.frames + RunConfig().ramp_frames(30.0)[1])
+            scenes.append(Scene(garment=g, body=model, betas=betas, motion=motion))
+            names.append(f"{kind}/{label}")
+            print(f"{names[-1]}: {g.vertex_count} vertices, {args.frames} frames", flush=True)
+    with open(args.out, "wb") as fh:  # our own objects for our own run step (numpy, torch, warp on the host)
+        pickle.dump({"scenes": scenes, "names": names}, fh)
+    print(f"wrote {args.out}")
+
+
+def run_scenes(args) -> None:
+    """Simulate the prepared scenes as one batch; print each scene's summary and save its metrics."""
+    import json
+    from pathlib import Path
+
+    from datagen.sim.scene import RunConfig, simulate
+    from datagen.sim.solver import SolverConfig
+
+    with open(args.inputs, "rb") as fh:
+        d = pickle.load(fh)
+    scenes, names = d["scenes"], d["names"]
+    lead_in = RunConfig().lead_in if args.lead_in is None else args.lead_in
+    config = RunConfig(lead_in=lead_in, solver=SolverConfig(self_collision=not args.no_self_collision,
+                                                            body_projection=not args.no_projection))
+    print(f"{len(scenes)} scenes in one batch, device {args.device}, {config}", flush=True)
+    t0 = time.perf_counter()
+
+    def progress(done, total):
+        if done % 50 == 0 or done == total:
+            el = time.perf_counter() - t0
+            print(f"  frame {done}/{total}  {el:.0f} s  {1000 * el / done:.0f} ms/frame", flush=True)
+
+    results = simulate(scenes, config, device=args.device, progress=progress)
+    out = Path(args.out_dir) if args.out_dir else None
+    if out:
+        out.mkdir(parents=True, exist_ok=True)
+    for name, r in zip(names, results):
+        summary = r.summary()
+        print(f"{name}: {json.dumps(summary)}")
+        if out:
+            np.savez_compressed(out / f"{name.replace('/', '_')}.npz",
+                                **{f"metric_{k}": v for k, v in r.metrics.items()}, recorded_from=r.recorded_from,
+                                positions=r.positions[::10])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
@@ -100,6 +159,23 @@ def main() -> None:
     p.add_argument("--batches", default="1")
     p.add_argument("--frames", type=int, default=30, help="timed frames (after one warm-up frame)")
     p.set_defaults(func=run)
+    p = sub.add_parser("prepare-runs", help="scenes for the long-run check (garments x motions)")
+    p.add_argument("--out", default="sim_runs.pkl")
+    p.add_argument("--garments", default="tshirt,dress,pants")
+    p.add_argument("--motions", default="walk,dance_disco")
+    p.add_argument("--frames", type=int, default=300)
+    p.add_argument("--body", default="regular")
+    p.add_argument("--garment-seed", type=int, default=0)
+    p.add_argument("--motion-seed", type=int, default=0)
+    p.set_defaults(func=prepare_runs)
+    p = sub.add_parser("run-scenes", help="simulate prepared scenes in one batch, print their summaries")
+    p.add_argument("--inputs", default="sim_runs.pkl")
+    p.add_argument("--device", default="cpu")
+    p.add_argument("--no-self-collision", action="store_true")
+    p.add_argument("--no-projection", action="store_true", help="turn the end-of-substep body projection off")
+    p.add_argument("--lead-in", type=float, default=None, help="seconds (default: RunConfig's)")
+    p.add_argument("--out-dir", default=None, help="per-scene metrics (.npz) go here")
+    p.set_defaults(func=run_scenes)
     args = ap.parse_args()
     args.func(args)
 

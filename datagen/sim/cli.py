@@ -55,9 +55,10 @@ def _cmd_simulate(args) -> int:
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
     garment = make_garment(args.garment, model, betas, seed=args.garment_seed)
-    motion = make_motion(args.motion, seed=args.motion_seed, frames=args.frames, fps=args.fps)
     config = RunConfig(solver=SolverConfig(substeps=args.substeps, iterations=args.iterations,
                                            self_collision=not args.no_self_collision))
+    _, ramp_motion = config.ramp_frames(args.fps)  # the ramp plays these motion frames unrecorded
+    motion = make_motion(args.motion, seed=args.motion_seed, frames=args.frames + ramp_motion, fps=args.fps)
     print(f"{args.garment} ({garment.vertex_count} vertices, {garment.material.name}) on {args.body}, "
           f"{args.motion} {args.frames} frames at {args.fps:g} fps, {args.substeps} substeps x {args.iterations} "
           f"iterations, self-collision {'off' if args.no_self_collision else 'on'}, device {device}", flush=True)

@@ -167,6 +167,75 @@ def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
 
 
 @wp.kernel
+def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
+                        scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
+                        body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
+                        radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32), h: float,
+                        x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), projected: wp.array(dtype=wp.int32)):
+    """Hard non-penetration at the end of a substep: a vertex inside the body (winding number, the
+    same test as the penetration metric) moves to its closest body point plus half its contact
+    radius along the face normal, and loses the velocity with which it moved into the body relative
+    to the body's own velocity there (an inelastic impact; the tangential part is kept). The
+    penalty contact does the work in the solve; this catches what it leaves inside, where one
+    closest-point plane per vertex is not enough (armpits, crotch, between the legs) or the body
+    moves faster than the penalty can push."""
+    i = wp.tid()
+    if active[i] == 0:
+        return
+    s = scene[i]
+    mesh = body_meshes[s]
+    q = wp.mesh_query_point_sign_winding_number(mesh, x[i], query, 2.0, 0.5)
+    if not q.result or q.sign >= 0.0:
+        return
+    f = body_face_base[s] + q.face
+    a = body_faces[f, 0]
+    b = body_faces[f, 1]
+    c = body_faces[f, 2]
+    w0 = q.u
+    w1 = q.v
+    w2 = 1.0 - q.u - q.v
+    p = body_now[a] * w0 + body_now[b] * w1 + body_now[c] * w2
+    n = wp.cross(body_now[b] - body_now[a], body_now[c] - body_now[a])
+    ln = wp.length(n)
+    if ln < 1.0e-20:
+        return
+    n = n / ln
+    vb = (p - (body_prev[a] * w0 + body_prev[b] * w1 + body_prev[c] * w2)) / h
+    r = radius[i]
+    if wp.dot(x[i] - p, n) < 0.25 * r:
+        x[i] = p + n * (0.5 * r)
+    else:
+        # in front of its closest face yet inside: where body parts overlap (an arm sunk into the
+        # torso, thighs into each other) the closest face is not the way out. Take the nearest
+        # outside point among 26 directions at distances r, 2r, ..., 32r.
+        found = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+        t = r
+        for _step in range(6):
+            if found == 0:
+                for k in range(26):
+                    if found == 0:
+                        dz = float(k % 3) - 1.0
+                        dy = float((k // 3) % 3) - 1.0
+                        dx = float(k // 9) - 1.0
+                        if k >= 13:  # skip (0, 0, 0)
+                            dz = float((k + 1) % 3) - 1.0
+                            dy = float(((k + 1) // 3) % 3) - 1.0
+                            dx = float((k + 1) // 9) - 1.0
+                        d = wp.normalize(wp.vec3(dx, dy, dz))
+                        cand = x[i] + d * t
+                        qc = wp.mesh_query_point_sign_winding_number(mesh, cand, query, 2.0, 0.5)
+                        if (not qc.result) or qc.sign > 0.0:
+                            x[i] = cand
+                            n = d
+                            found = 1
+            t = t * 2.0
+    rel = wp.dot(v[i] - vb, n)
+    if rel < 0.0:
+        v[i] = v[i] - n * rel
+    wp.atomic_add(projected, scene[i], 1)
+
+
+@wp.kernel
 def interpolate_body(b0: wp.array(dtype=wp.vec3), b1: wp.array(dtype=wp.vec3), alpha: float,
                      out: wp.array(dtype=wp.vec3)):
     """Body vertices at ``alpha`` within the frame."""
@@ -356,11 +425,13 @@ def sort_lists(count: wp.array(dtype=wp.int32), items: wp.array2d(dtype=wp.int32
 
 
 @wp.kernel
-def finish_bounds(min_dist: wp.array(dtype=float), fraction: float, bound: wp.array(dtype=float)):
+def finish_bounds(min_dist: wp.array(dtype=float), fraction: float, floor: float, bound: wp.array(dtype=float)):
     """A vertex with a non-neighbouring cloth primitive within the search distance moves at most
-    ``fraction`` of that distance this substep (then no two such primitives can meet)."""
+    ``fraction`` of that distance this substep (then no two such primitives can meet). Distances
+    below ``floor`` count as ``floor``: primitives that already touch (or crossed) are the contact
+    forces' business, and a bound of zero would freeze the vertex for good."""
     i = wp.tid()
-    bound[i] = fraction * min_dist[i]
+    bound[i] = fraction * wp.max(min_dist[i], floor)
 
 
 @wp.func

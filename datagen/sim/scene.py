@@ -6,7 +6,13 @@ Every scene starts with its garment at rest on its body in the rest pose. Then:
 2. a lead-in of ``lead_in`` seconds that moves the body from the rest pose to the motion's first
    pose (:meth:`~datagen.motion.motion.Motion.with_lead_in`);
 3. ``settle_pose`` frames holding the first pose;
-4. the motion's frames, which are recorded.
+4. a ramp of ``ramp`` seconds (R frames) in which the motion starts from standstill: the motion's
+   clock runs at a speed that grows linearly from 0 to 1, so the body accelerates smoothly into the
+   motion instead of jumping to full speed in one frame (a walk starting at 1.2 m/s in 1/30 s is
+   3.7 g: the cloth tears off the body). The ramp plays motion frames 0 to R/2 (the body between
+   frames is interpolated linearly) and these are not recorded;
+5. the motion's frames from R/2 on, which are recorded. Ask for R/2 frames more than you want
+   recorded (:meth:`RunConfig.ramp_frames`).
 
 Metrics are measured every frame of every phase; a scene that passes a failure threshold in any
 frame is flagged with the reason (and kept running, so the batch goes on).
@@ -36,13 +42,20 @@ class RunConfig:
     settle_rest: int = 15
     lead_in: float = 0.5
     settle_pose: int = 10
+    ramp: float = 1.0
     solver: SolverConfig = field(default_factory=SolverConfig)
     thresholds: FailureThresholds = field(default_factory=FailureThresholds)
 
     def __post_init__(self):
-        if self.settle_rest < 1 or self.settle_pose < 0 or self.lead_in < 0:
-            raise InputError(f"settle_rest must be >= 1 and settle_pose, lead_in >= 0; got {self.settle_rest}, "
-                             f"{self.settle_pose}, {self.lead_in}")
+        if self.settle_rest < 1 or self.settle_pose < 0 or self.lead_in < 0 or self.ramp < 0:
+            raise InputError(f"settle_rest must be >= 1 and settle_pose, lead_in, ramp >= 0; got {self.settle_rest}, "
+                             f"{self.settle_pose}, {self.lead_in}, {self.ramp}")
+
+    def ramp_frames(self, fps: float) -> tuple[int, int]:
+        """(R, K): simulated ramp frames (even) and the motion frames they play, K = R/2, which
+        are not recorded."""
+        r = 2 * int(round(self.ramp * fps / 2))
+        return r, r // 2
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -74,6 +87,7 @@ class SceneResult:
         faces: garment triangles [F, 3].
         metrics: name -> per-frame values over every simulated frame [settle + lead-in + T].
         recorded_from: index of the first recorded frame in ``metrics``.
+        motion_from: the motion frame of the first recorded frame (the ramp's frames before it).
         failure: the reason the scene failed, or None.
         failure_frame: the frame (index into ``metrics``) where it first failed, or -1.
         seconds: wall time of the batch this scene was in.
@@ -83,12 +97,14 @@ class SceneResult:
     faces: np.ndarray
     metrics: dict
     recorded_from: int
+    motion_from: int
     failure: str | None
     failure_frame: int
     seconds: float
 
     def save(self, path, **extra) -> None:
         np.savez_compressed(path, positions=self.positions, faces=self.faces, recorded_from=self.recorded_from,
+                            motion_from=self.motion_from,
                             failure="" if self.failure is None else self.failure, failure_frame=self.failure_frame,
                             **{f"metric_{k}": v for k, v in self.metrics.items()}, **extra)
 
@@ -110,46 +126,113 @@ class SceneResult:
         }
 
 
-def simulate(scenes: list[Scene], config: RunConfig = RunConfig(), device: str | None = None,
+@dataclass
+class SceneArrays:
+    """A scene reduced to arrays: what the simulator needs, without the body model or motion code
+    (so a scene can be prepared on one machine and simulated on another).
+
+    Attributes:
+        garment_vertices: the garment's rest drape [V, 3] (m), at the motion's first translation.
+        garment_faces: triangles [F, 3].
+        material: material preset name.
+        material_frames: weft and warp directions per face [F, 2, 3].
+        body_frames: posed body vertices of every motion frame, lead-in included [N, B, 3] (m).
+        body_faces: body triangles [Fb, 3].
+        fps: frame rate [1/s].
+        lead_frames: lead-in frames at the start of ``body_frames`` (frame 0 is the rest pose).
+    """
+
+    garment_vertices: np.ndarray
+    garment_faces: np.ndarray
+    material: str
+    material_frames: np.ndarray
+    body_frames: np.ndarray
+    body_faces: np.ndarray
+    fps: float
+    lead_frames: int
+
+    @property
+    def frame_count(self) -> int:
+        """Frames of the motion itself (without the lead-in)."""
+        return len(self.body_frames) - self.lead_frames
+
+
+def scene_arrays(scene: Scene, lead_in: float) -> SceneArrays:
+    """Pose the scene's body over its motion with a lead-in of ``lead_in`` seconds from the rest pose."""
+    s = scene
+    motion, lead = s.motion.with_lead_in(lead_in)
+    betas = np.asarray(s.betas, dtype=np.float64).reshape(1, -1)
+    poses = motion.poses.reshape(motion.frame_count, -1)
+    verts, _ = s.body.pose(np.repeat(betas, motion.frame_count, 0), poses, motion.trans)
+    rest = np.asarray(s.body.shaped(betas))[0]
+    shift = verts[0] - rest  # the lead-in's frame 0 is the rest pose at the first frame's translation
+    if np.abs(shift - shift.mean(0)).max() > 1e-6:
+        raise InputError("the motion's lead-in does not start in the body's rest pose")
+    g = s.garment
+    return SceneArrays(garment_vertices=g.vertices + shift.mean(0), garment_faces=np.asarray(g.faces),
+                       material=g.material.name, material_frames=g.material_frames(),
+                       body_frames=verts.astype(np.float32), body_faces=np.asarray(s.body.faces),
+                       fps=float(s.motion.fps), lead_frames=int(lead))
+
+
+def save_scene_arrays(path, scenes: list[SceneArrays], **extra) -> None:
+    """Write scenes to one .npz (``s{k}_{field}`` keys), readable with numpy and warp alone."""
+    data = {"scene_count": len(scenes)}
+    for k, a in enumerate(scenes):
+        data.update({f"s{k}_{name}": np.asarray(getattr(a, name)) for name in SceneArrays.__dataclass_fields__})
+    np.savez_compressed(path, **data, **extra)
+
+
+def load_scene_arrays(path) -> list[SceneArrays]:
+    """Read what :func:`save_scene_arrays` wrote."""
+    with np.load(path) as d:
+        out = []
+        for k in range(int(d["scene_count"])):
+            f = {name: d[f"s{k}_{name}"] for name in SceneArrays.__dataclass_fields__}
+            f["material"], f["fps"], f["lead_frames"] = str(f["material"]), float(f["fps"]), int(f["lead_frames"])
+            out.append(SceneArrays(**f))
+    return out
+
+
+def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(), device: str | None = None,
              progress=None) -> list[SceneResult]:
     """Run a batch of scenes in one model (one set of launches); see the module doc for the phases.
 
-    All scenes' motions must have the same frame count and frame rate (batch them by length).
-    ``progress(frame, frame_count)`` is called after every frame.
+    All scenes' motions must have the same frame count, lead-in and frame rate (batch them by
+    length). ``progress(frame, frame_count)`` is called after every frame.
     """
     if not scenes:
         raise InputError("no scenes to simulate")
-    fps = {float(s.motion.fps) for s in scenes}
-    lengths = {s.motion.frame_count for s in scenes}
+    arrays = [s if isinstance(s, SceneArrays) else scene_arrays(s, config.lead_in) for s in scenes]
+    fps = {a.fps for a in arrays}
+    lengths = {(len(a.body_frames), a.lead_frames) for a in arrays}
     if len(fps) > 1 or len(lengths) > 1:
-        raise InputError(f"a batch needs one frame rate and one length; got fps {sorted(fps)}, frames {sorted(lengths)}")
+        raise InputError(f"a batch needs one frame rate and one length; got fps {sorted(fps)}, "
+                         f"(frames, lead-in frames) {sorted(lengths)}")
     fps = fps.pop()
     builder = ClothModelBuilder()
     body_frames = []
-    lead = 0
-    for k, s in enumerate(scenes):
-        motion, lead = s.motion.with_lead_in(config.lead_in)
-        betas = np.asarray(s.betas, dtype=np.float64).reshape(1, -1)
-        poses = motion.poses.reshape(motion.frame_count, -1)
-        verts, _ = s.body.pose(np.repeat(betas, motion.frame_count, 0), poses, motion.trans)
-        rest = np.asarray(s.body.shaped(betas))[0]
-        shift = verts[0] - rest  # the lead-in's frame 0 is the rest pose at the first frame's translation
-        if np.abs(shift - shift.mean(0)).max() > 1e-6:
-            raise InputError("the motion's lead-in does not start in the body's rest pose")
-        g = s.garment
-        builder.add_cloth(g.vertices + shift.mean(0), g.faces, material_name=g.material, scene=k,
-                          material_frames=g.material_frames())
-        builder.add_body(verts[0], s.body.faces, scene=k)
-        body_frames.append(verts)
+    for k, a in enumerate(arrays):
+        builder.add_cloth(a.garment_vertices, a.garment_faces, material_name=a.material, scene=k,
+                          material_frames=a.material_frames)
+        builder.add_body(a.body_frames[0], a.body_faces, scene=k)
+        body_frames.append(a.body_frames)
+    lead = arrays[0].lead_frames
     model = builder.finalize(device)
     solver = SolverVBD(model, config.solver)
     metrics = Metrics(model)
     state_a, state_b = ClothState.from_model(model), ClothState.from_model(model)
-    n_motion = lead + scenes[0].motion.frame_count
-    schedule = [0] * config.settle_rest + list(range(1, lead + 1)) + [lead] * config.settle_pose + list(
-        range(lead + 1, n_motion))
-    # the motion's frame 0 is the last frame of the lead-in and pose settle
-    recorded_from = config.settle_rest + lead + config.settle_pose - 1
+    n_motion = len(body_frames[0])
+    ramp, motion_from = config.ramp_frames(fps)
+    if lead + motion_from >= n_motion:
+        raise InputError(f"the motion has {n_motion - lead} frames; the ramp of {config.ramp:g} s plays {motion_from} "
+                         f"of them before recording starts: give it more frames or a shorter ramp")
+    # body source frame (fractional: interpolated) of every simulated frame
+    schedule = ([0.0] * config.settle_rest + [float(i) for i in range(1, lead + 1)] + [float(lead)] * config.settle_pose
+                + [lead + i * i / (2.0 * ramp) for i in range(1, ramp + 1)]
+                + [float(i) for i in range(lead + motion_from + 1, n_motion)])
+    # the first recorded frame is motion frame ``motion_from``: the last of the ramp (or of the pose settle)
+    recorded_from = config.settle_rest + lead + config.settle_pose + ramp - 1
     control = BodyControl.from_numpy(model, np.concatenate([b[0] for b in body_frames]))
     solver.reset_body(control)
     series = {k: [] for k in METRIC_NAMES}
@@ -159,7 +242,9 @@ def simulate(scenes: list[Scene], config: RunConfig = RunConfig(), device: str |
     start = time.perf_counter()
     dt = 1.0 / fps
     for f, src in enumerate(schedule):
-        control.set(np.concatenate([b[src] for b in body_frames]))
+        i0 = int(np.floor(src))
+        w = src - i0
+        control.set(np.concatenate([b[i0] if w == 0 else (1 - w) * b[i0] + w * b[i0 + 1] for b in body_frames]))
         solver.step(state_a, state_b, control, dt)
         state_a, state_b = state_b, state_a
         frame = metrics.measure(state_a, solver)
@@ -181,7 +266,8 @@ def simulate(scenes: list[Scene], config: RunConfig = RunConfig(), device: str |
     scene_of = model.host["particle_scene"]
     for s in range(len(scenes)):
         sel = scene_of == s
-        out.append(SceneResult(positions=pos[:, sel], faces=np.asarray(scenes[s].garment.faces), recorded_from=recorded_from,
+        out.append(SceneResult(positions=pos[:, sel], faces=np.asarray(arrays[s].garment_faces),
+                               recorded_from=recorded_from, motion_from=motion_from,
                                metrics={k: np.array([v[s] for v in series[k]]) for k in METRIC_NAMES},
                                failure=failure[s], failure_frame=failure_frame[s], seconds=seconds))
     return out

@@ -32,9 +32,14 @@ class SolverConfig:
         self_friction: cloth-cloth Coulomb friction coefficient.
         self_query: cloth-cloth search distance [m]: a vertex with a non-neighbouring cloth
             primitive closer than this moves at most 0.4x that distance per substep.
+        self_bound_floor: distance to the nearest cloth primitive below which the move bound stops
+            shrinking [m] (primitives that already touch must not freeze a vertex).
         friction_velocity: velocity below which friction is smoothed (static) [m/s].
         contact_capacity: initial contacts stored per vertex, triangle and edge (grows on demand).
         chebyshev_rho: spectral radius estimate for Chebyshev acceleration of the sweeps (0: off).
+        body_projection: at the end of every substep, move vertices that ended inside the body
+            (winding-number test) out to its surface and take their inward velocity (see
+            ``kernels.project_out_of_body``).
         detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
             substep); each detection renews the move bounds from the current positions, so cloth
             pressed between the body and other cloth can follow a fast body.
@@ -52,17 +57,19 @@ class SolverConfig:
     self_stiffness: float = 2.0e3
     self_friction: float = 0.2
     self_query: float = 0.01
+    self_bound_floor: float = 0.001
     friction_velocity: float = 1.0e-3
     contact_capacity: int = 16
     chebyshev_rho: float = 0.7
     detection_interval: int = 3
+    body_projection: bool = True
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
             if int(getattr(self, name)) < 1:
                 raise InputError(f"solver {name} must be >= 1, got {getattr(self, name)}")
         for name in ("body_stiffness", "body_query", "self_radius", "self_stiffness", "self_query",
-                     "friction_velocity"):
+                     "friction_velocity", "self_bound_floor"):
             if not float(getattr(self, name)) > 0:
                 raise InputError(f"solver {name} must be > 0, got {getattr(self, name)}")
         if self.self_query <= self.self_radius:
@@ -119,6 +126,7 @@ class SolverVBD:
             self.tv_count = wp.zeros(nf, dtype=wp.int32)
             self.ee_count = wp.zeros(ne, dtype=wp.int32)
             self.needed = wp.zeros(3, dtype=wp.int32)
+            self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
         self._allocate_contacts(self.config.contact_capacity)
         self.contact_growths = 0
 
@@ -186,7 +194,7 @@ class SolverVBD:
             wp.launch(K.count_needed, n, inputs=[self.vt_count, self.needed, 0])
             wp.launch(K.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
             wp.launch(K.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
-        wp.launch(K.finish_bounds, n, inputs=[self.min_dist, 0.4, self.bound])
+        wp.launch(K.finish_bounds, n, inputs=[self.min_dist, 0.4, c.self_bound_floor, self.bound])
 
     def _step(self, state, control, dt: float) -> int:
         import warp as wp
@@ -196,6 +204,7 @@ class SolverVBD:
         h = dt / c.substeps
         x, v = state.positions, state.velocities
         self.needed.zero_()
+        self.projected.zero_()
         with wp.ScopedDevice(m.device):
             for s in range(c.substeps):
                 a1 = (s + 1) / c.substeps
@@ -241,4 +250,9 @@ class SolverVBD:
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
                                                            self.body_radius, c.body_stiffness, self.body_lambda])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
+                if c.body_projection:
+                    for _ in range(2):  # a second pass for vertices the first put into another body part
+                        wp.launch(K.project_out_of_body, n, inputs=[
+                            self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
+                            self.body_sub, 2.0 * c.body_query, self.body_radius, m.active, h, x, v, self.projected])
         return int(self.needed.numpy().max()) if c.self_collision else 0
