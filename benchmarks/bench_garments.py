@@ -47,7 +47,7 @@ def _one(task: tuple[str, str, int, float | None]) -> dict:
     try:
         g = make_garment(kind, model, _STATE["betas"][body], seed=seed, target_edge_length=edge)
     except Exception as exc:  # noqa: BLE001 - a build that raises is a failure to report, not to hide
-        return {"kind": kind, "error": f"build error {type(exc).__name__}: {exc}"}
+        return {"kind": kind, "body": body, "seed": seed, "error": f"build error {type(exc).__name__}: {exc}"}
     seconds = time.perf_counter() - t0
     c = check_garment(g, _STATE["shaped"][body], model.faces)
     return {"kind": kind, "body": body, "seed": seed, "seconds": seconds, "vertices": g.vertex_count, **c}
@@ -118,6 +118,11 @@ def main() -> None:
         else:
             print(f"{kind:18s} {len(rs):4d} all failed: {'; '.join(f'{k} x{n}' for k, n in fails.items())}")
     print(f"failed garments in all: {total_fail}")
+    for kind in kinds:
+        for r in sorted(results[kind], key=lambda r: (r.get("body", ""), r.get("seed", -1))):
+            if "error" in r or not r["ok"]:
+                what = r["error"] if "error" in r else "; ".join(r["failures"])
+                print(f"  failed: {kind} body={r.get('body')} seed={r.get('seed')}: {what}")
 
 
 if __name__ == "__main__":
