@@ -1,0 +1,162 @@
+"""What a store holds: :func:`store_info` (a JSON-able summary) and :func:`format_store_info` (a
+printable table): splits and their counts, sizes on disk against uncompressed, and the failures.
+
+A store still being generated (not packed) is summarised from its staging area: staged and
+missing samples, and the failures among the staged ones.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from datagen.errors import InputError
+from datagen.store.layout import MARKER, STAGING, directory_bytes, parse_sample_dir_name, read_root_attributes
+from schemas.dataset import SPLIT_NAMES, STATIC_GROUPS, STORE_FORMAT
+
+
+def store_info(path: str | Path) -> dict[str, Any]:
+    """Summary of the store at ``path``.
+
+    Returns:
+        ``path``, ``complete``, ``schema_version``, ``drape_version``, ``seed``, ``sample_count``,
+        ``segment_length``; for a complete store ``splits`` (name -> samples, ok, failed, frames,
+        sim_frames, vertex_rows, segments, garment_instances, bodies, motions), ``totals`` (the same
+        over all samples), ``static`` (garment instances, bodies, motions, body vertices, fit features),
+        ``sizes`` (group -> bytes on disk and uncompressed) and ``failures`` (one row per failure
+        code that occurs: code, name, count, share, per split, median failure frame); for a store in
+        progress ``staged``, ``missing``, ``static_staged`` and ``failures`` over the staged samples.
+    """
+    path = Path(path)
+    attrs = read_root_attributes(path)
+    if attrs is None or attrs.get("format") != STORE_FORMAT:
+        raise InputError(f"{path} is not a drape dataset store (no zarr.json with format '{STORE_FORMAT}')")
+    info: dict[str, Any] = {"path": str(path), "complete": attrs.get("complete") is True}
+    for key in ("schema_version", "drape_version", "seed", "sample_count", "segment_length"):
+        info[key] = attrs.get(key)
+    failure_names = list(attrs.get("failure_names", []))
+    if not info["complete"]:
+        return info | _staging_info(path, attrs, failure_names)
+
+    from datagen.store.reader import open_store
+
+    store = open_store(path, backend="zarr")
+    idx = store.index
+    T = np.diff(idx["frame_start"])
+    T_sim = np.diff(idx["sim_frame_start"])
+    split, failure = idx["split"], idx["failure"]
+    seg_split = split[idx["segments"][:, 0]] if len(idx["segments"]) else np.zeros(0, int)
+
+    def counts(mask: np.ndarray, seg_mask: np.ndarray) -> dict[str, int]:
+        return {"samples": int(mask.sum()), "ok": int((mask & (failure == 0)).sum()),
+                "failed": int((mask & (failure != 0)).sum()), "frames": int(T[mask].sum()),
+                "sim_frames": int(T_sim[mask].sum()), "vertex_rows": int((T * idx["vertex_count"])[mask].sum()),
+                "segments": int(seg_mask.sum()), "garment_instances": len(np.unique(idx["garment"][mask])),
+                "bodies": len(np.unique(idx["body"][mask])), "motions": len(np.unique(idx["motion"][mask]))}
+
+    info["splits"] = {name: counts(split == code, seg_split == code) for code, name in enumerate(SPLIT_NAMES)}
+    info["totals"] = counts(np.ones(len(split), bool), np.ones(len(seg_split), bool))
+    meta = json.loads((path / "zarr.json").read_text())
+    consolidated = meta.get("consolidated_metadata", {}).get("metadata", {})
+
+    def shape(p: str) -> list[int]:
+        return consolidated.get(p, {}).get("shape", [0])
+
+    info["static"] = {"garment_instances": shape("garments/type")[0], "bodies": shape("bodies/betas")[0],
+                      "motions": shape("motions/label")[0], "body_vertices": shape("body/v_template")[0],
+                      "fit_features": shape("fit/mean")[0]}
+    sizes: dict[str, dict[str, int]] = {}
+    for key, m in consolidated.items():
+        if m.get("node_type") != "array":
+            continue
+        group = key.split("/")[0]
+        raw = int(np.prod(m["shape"], dtype=np.int64)) * np.dtype(m["data_type"]).itemsize
+        sizes.setdefault(group, {"on_disk": 0, "uncompressed": 0})["uncompressed"] += raw
+    for group in sizes:
+        sizes[group]["on_disk"] = directory_bytes(path / group)
+    info["sizes"] = dict(sorted(sizes.items(), key=lambda kv: -kv[1]["on_disk"]))
+    info["size_on_disk"] = directory_bytes(path)
+    ff = idx["failure_frame"]
+    info["failures"] = _failure_rows(failure, split, ff, failure_names)
+    return info
+
+
+def _failure_rows(failure: np.ndarray, split: np.ndarray, failure_frame: np.ndarray, names: list[str]) -> list[dict]:
+    rows = []
+    n = max(1, len(failure))
+    for code in np.unique(failure):
+        mask = failure == code
+        frames = failure_frame[mask & (failure_frame >= 0)]
+        rows.append({"code": int(code), "name": names[code] if 0 <= code < len(names) else f"code {code}",
+                     "count": int(mask.sum()), "share": float(mask.sum() / n),
+                     "per_split": {s: int((mask & (split == k)).sum()) for k, s in enumerate(SPLIT_NAMES)},
+                     "median_failure_frame": float(np.median(frames)) if len(frames) else None})
+    return rows
+
+
+def _staging_info(path: Path, attrs: dict, failure_names: list[str]) -> dict[str, Any]:
+    staging = path / STAGING
+    failures, splits, frames = [], [], []
+    if staging.is_dir():
+        for entry in sorted(staging.iterdir()):
+            if parse_sample_dir_name(entry.name) is None or not (entry / MARKER).is_file():
+                continue
+            try:
+                m = json.loads((entry / MARKER).read_text())
+            except (OSError, ValueError):
+                continue
+            failures.append(m["scalars"]["failure"])
+            splits.append(m["scalars"]["split"])
+            frames.append(m["scalars"]["failure_frame"])
+    n = int(attrs.get("sample_count", 0))
+    return {"staged": len(failures), "missing": n - len(failures),
+            "static_staged": [g for g in STATIC_GROUPS if (staging / f"static-{g}" / MARKER).is_file()],
+            "size_on_disk": directory_bytes(path),
+            "failures": _failure_rows(np.asarray(failures, int), np.asarray(splits, int), np.asarray(frames, int),
+                                      failure_names)}
+
+
+def _bytes(n: int) -> str:
+    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
+        if abs(n) < 1024 or unit == "TiB":
+            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
+        n /= 1024
+    return str(n)
+
+
+def format_store_info(info: dict[str, Any]) -> str:
+    """:func:`store_info` as a plain-text table."""
+    state = "complete" if info["complete"] else "NOT PACKED (generation in progress or pack() interrupted)"
+    lines = [f"store {info['path']}: {state}",
+             f"schema {info['schema_version']}, drape {info['drape_version']}, seed {info['seed']}, "
+             f"{info['sample_count']} samples, segments of {info['segment_length']} frames"]
+    if not info["complete"]:
+        lines.append(f"staged {info['staged']} samples, missing {info['missing']}; static groups staged: "
+                     f"{', '.join(info['static_staged']) or 'none'}; {_bytes(info['size_on_disk'])} on disk")
+    else:
+        cols = ("samples", "ok", "failed", "frames", "sim_frames", "segments", "garment_instances", "bodies", "motions")
+        heads = ("samples", "ok", "failed", "frames", "sim frames", "segments", "garments", "bodies", "motions")
+        lines += ["", f"{'split':<8}" + "".join(f"{h:>11}" for h in heads)]
+        for name, row in [*info["splits"].items(), ("total", info["totals"])]:
+            lines.append(f"{name:<8}" + "".join(f"{row[c]:>11}" for c in cols))
+        s = info["static"]
+        lines += ["", f"static: {s['garment_instances']} garment instances, {s['bodies']} bodies, "
+                      f"{s['motions']} motions, body model of {s['body_vertices']} vertices, fit model of {s['fit_features']} features"]
+        lines += ["", f"{'group':<15}{'on disk':>12}{'uncompressed':>14}{'ratio':>8}"]
+        for group, sz in info["sizes"].items():
+            ratio = sz["uncompressed"] / sz["on_disk"] if sz["on_disk"] else float("nan")
+            lines.append(f"{group:<15}{_bytes(sz['on_disk']):>12}{_bytes(sz['uncompressed']):>14}{ratio:>8.2f}")
+        lines.append(f"{'total':<15}{_bytes(info['size_on_disk']):>12}"
+                     f"{_bytes(sum(v['uncompressed'] for v in info['sizes'].values())):>14}")
+    lines += ["", f"{'failure':<20}{'code':>5}{'count':>8}{'share':>8}" + "".join(f"{s:>7}" for s in SPLIT_NAMES)
+              + f"{'median frame':>14}"]
+    for row in info["failures"]:
+        med = "-" if row["median_failure_frame"] is None else f"{row['median_failure_frame']:.0f}"
+        lines.append(f"{row['name']:<20}{row['code']:>5}{row['count']:>8}{row['share']:>8.1%}"
+                     + "".join(f"{row['per_split'][s]:>7}" for s in SPLIT_NAMES) + f"{med:>14}")
+    if not info["failures"]:
+        lines.append("(no samples)")
+    return "\n".join(lines)

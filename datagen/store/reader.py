@@ -1,0 +1,418 @@
+"""Read a packed dataset store: samples, frames, segments, garment rest meshes, body and fit models.
+
+:func:`open_store` returns a :class:`DatasetStore`. Reads go to the rows they need only: a sample's
+frames are contiguous rows of the flat tables, so ``frames(i, slice(a, b))`` reads the chunks
+holding rows of frames ``a .. b-1`` of sample ``i`` (inside their shards) and nothing else. The
+per-sample tables (offsets, scalars; a few bytes per sample) are read once, on first use.
+
+Two backends read the same store: ``zarr`` (zarr-python, always installed) and ``tensorstore``
+(faster for many small reads; ``pip install tensorstore``). ``backend="auto"`` takes tensorstore
+when it is installed. A :class:`DatasetStore` pickles without its open handles, so torch
+``DataLoader`` workers can share one.
+"""
+
+from __future__ import annotations
+
+import logging
+import warnings
+from collections.abc import Iterator, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from datagen.errors import InputError
+from datagen.store.layout import read_root_attributes
+from schemas.dataset import ARRAYS, DATASET_SCHEMA_VERSION, NAME_LISTS, SPLIT_NAMES, STATIC_GROUPS, STORE_FORMAT
+
+logger = logging.getLogger(__name__)
+
+VERTEX_FRAME_ARRAYS = tuple(a.name for a in ARRAYS.values() if a.table == "vertex_frame")
+FRAME_ARRAYS = tuple(a.name for a in ARRAYS.values() if a.table == "frame")
+SIM_FRAME_ARRAYS = tuple(a.name for a in ARRAYS.values() if a.table == "sim_frame")
+SAMPLE_SCALARS = tuple(a.name for a in ARRAYS.values() if a.table == "sample")
+_PATH = {a.name: a.path for a in ARRAYS.values() if a.written_by == "stage_sample"}
+_DTYPE = {a.name: np.dtype(a.dtype) for a in ARRAYS.values() if a.written_by == "stage_sample"}
+
+TENSORSTORE_CACHE_BYTES = 64 * 1024 * 1024
+"""Tensorstore's chunk and shard-index cache per open store (decoded chunks read again are free)."""
+
+
+class _ZarrRows:
+    """Row reads through zarr-python."""
+
+    name = "zarr"
+
+    def __init__(self, path: Path):
+        import zarr
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # consolidated metadata is not (yet) in the v3 spec
+            self.root = zarr.open_group(store=str(path), mode="r", use_consolidated=True)
+        self.arrays: dict[str, Any] = {}
+
+    def array(self, path: str):
+        if path not in self.arrays:
+            self.arrays[path] = self.root[path]
+        return self.arrays[path]
+
+    def read_many(self, requests: Sequence[tuple[str, int, int]]) -> list[np.ndarray]:
+        return [self.array(p)[a:b] for p, a, b in requests]
+
+    def read_all(self, path: str) -> np.ndarray:
+        return self.array(path)[...]
+
+
+class _TensorstoreRows:
+    """Row reads through tensorstore's zarr3 driver (all reads of one call run concurrently)."""
+
+    name = "tensorstore"
+
+    def __init__(self, path: Path):
+        import tensorstore as ts
+
+        self.ts = ts
+        self.path = path
+        self.context = ts.Context({"cache_pool": {"total_bytes_limit": TENSORSTORE_CACHE_BYTES}})
+        self.arrays: dict[str, Any] = {}
+
+    def array(self, path: str):
+        if path not in self.arrays:
+            spec = {"driver": "zarr3", "kvstore": {"driver": "file", "path": str(self.path / path)}}
+            self.arrays[path] = self.ts.open(spec, read=True, context=self.context).result()
+        return self.arrays[path]
+
+    def read_many(self, requests: Sequence[tuple[str, int, int]]) -> list[np.ndarray]:
+        futures = [self.array(p)[a:b].read() for p, a, b in requests]
+        return [np.asarray(f.result()) for f in futures]
+
+    def read_all(self, path: str) -> np.ndarray:
+        return np.asarray(self.array(path).read().result())
+
+
+def _backend(name: str):
+    if name == "auto":
+        try:
+            import tensorstore  # noqa: F401
+        except ImportError:
+            return _ZarrRows
+        return _TensorstoreRows
+    if name == "zarr":
+        return _ZarrRows
+    if name == "tensorstore":
+        from datagen.errors import require
+
+        require("tensorstore", "reading a store with backend='tensorstore'")
+        return _TensorstoreRows
+    raise InputError(f"unknown store backend {name!r}; choose 'auto', 'zarr' or 'tensorstore'")
+
+
+def open_store(path: str | Path, *, backend: str = "auto") -> DatasetStore:
+    """Open the packed store at ``path`` for reading.
+
+    Raises:
+        InputError: ``path`` is not a drape store, is not complete (pack() has not finished), or has
+            another schema version.
+    """
+    return DatasetStore(path, backend=backend)
+
+
+class DatasetStore:
+    """A packed, complete dataset store, read-only.
+
+    Attributes:
+        path: the store directory.
+        attrs: the root attributes (config, seed, names, units, ...).
+        config: the resolved dataset configuration the store was made with.
+        seed: the dataset seed.
+        sample_count: samples, failed ones included.
+        segment_length: frames per segment.
+        names: code name lists (``label_names``, ``split_names``, ``failure_names``, ...).
+        backend: ``"zarr"`` or ``"tensorstore"``.
+    """
+
+    def __init__(self, path: str | Path, *, backend: str = "auto"):
+        path = Path(path)
+        attrs = read_root_attributes(path)
+        if attrs is None or attrs.get("format") != STORE_FORMAT:
+            raise InputError(f"{path} is not a drape dataset store (no zarr.json with format '{STORE_FORMAT}')")
+        if attrs.get("schema_version") != DATASET_SCHEMA_VERSION:
+            raise InputError(f"store {path} has schema version {attrs.get('schema_version')}; this drape reads "
+                             f"version {DATASET_SCHEMA_VERSION}")
+        if attrs.get("complete") is not True:
+            raise InputError(f"store {path} is not complete: its pack() has not finished. Run generation (or "
+                             "StoreWriter.pack()) on it again")
+        self.path = path
+        self.attrs = attrs
+        self.config: dict = attrs["config"]
+        self.seed: int = attrs["seed"]
+        self.sample_count: int = attrs["sample_count"]
+        self.segment_length: int = attrs["segment_length"]
+        self.names: dict[str, tuple[str, ...]] = {k: tuple(attrs[k]) for k in NAME_LISTS}
+        self._backend_cls = _backend(backend)
+        self.backend: str = self._backend_cls.name
+        self._rows = None
+        self._index: dict[str, np.ndarray] | None = None
+
+    def __repr__(self) -> str:
+        return f"DatasetStore({str(self.path)!r}, samples={self.sample_count}, backend={self.backend!r})"
+
+    def __getstate__(self) -> dict:
+        state = self.__dict__.copy()
+        state["_rows"] = None  # reopened lazily in the other process
+        return state
+
+    def __len__(self) -> int:
+        return self.sample_count
+
+    @property
+    def rows(self):
+        if self._rows is None:
+            self._rows = self._backend_cls(self.path)
+        return self._rows
+
+    def array(self, path: str):
+        """The backend's array object for ``path`` (a ``zarr.Array`` or ``tensorstore.TensorStore``)."""
+        if path not in ARRAYS:
+            raise InputError(f"no array {path!r} in the schema; arrays are {sorted(ARRAYS)}")
+        return self.rows.array(path)
+
+    def read(self, path: str, start: int | None = None, stop: int | None = None) -> np.ndarray:
+        """Rows ``start:stop`` of the array at ``path`` (all rows by default)."""
+        if start is None and stop is None:
+            return self.rows.read_all(path)
+        arr = self.array(path)
+        n = int(arr.shape[0])
+        start, stop, _ = slice(start, stop).indices(n)
+        return self.rows.read_many([(path, start, max(start, stop))])[0]
+
+    # -- per-sample tables (read once)
+
+    @property
+    def index(self) -> dict[str, np.ndarray]:
+        """In-memory per-sample tables: every scalar by name, plus ``frame_start``, ``sim_frame_start``,
+        ``vertex_start`` (first vertex row of each sample), ``vertex_count`` and ``segments``."""
+        if self._index is None:
+            idx = {name: self.rows.read_all(f"samples/{name}") for name in SAMPLE_SCALARS}
+            idx["frame_start"] = self.rows.read_all("index/frame_start")
+            idx["sim_frame_start"] = self.rows.read_all("index/sim_frame_start")
+            vrs = self.rows.read_all("index/vertex_row_start")
+            idx["vertex_start"] = vrs[idx["frame_start"]]
+            idx["garment_vertex_start"] = self.rows.read_all("garments/vertex_start")
+            idx["garment_face_start"] = self.rows.read_all("garments/face_start")
+            idx["vertex_count"] = np.diff(idx["garment_vertex_start"])[idx["garment"]] if len(idx["garment"]) \
+                else np.zeros(0, np.int64)
+            idx["segments"] = self.rows.read_all("index/segments")
+            self._index = idx
+        return self._index
+
+    def _check(self, i: int) -> int:
+        if isinstance(i, bool) or not isinstance(i, (int, np.integer)) or not 0 <= i < self.sample_count:
+            raise IndexError(f"sample {i!r} is not in 0 .. {self.sample_count - 1}")
+        return int(i)
+
+    def frame_count(self, i: int) -> int:
+        """Recorded frames T of sample ``i`` (0 for a failed sample)."""
+        i = self._check(i)
+        fs = self.index["frame_start"]
+        return int(fs[i + 1] - fs[i])
+
+    def sim_frame_count(self, i: int) -> int:
+        """Simulated frames T_sim of sample ``i``."""
+        i = self._check(i)
+        ss = self.index["sim_frame_start"]
+        return int(ss[i + 1] - ss[i])
+
+    def vertex_count(self, i: int) -> int:
+        """Garment vertices V of sample ``i``."""
+        return int(self.index["vertex_count"][self._check(i)])
+
+    def scalars(self, i: int) -> dict[str, Any]:
+        """Per-sample scalars of sample ``i`` (numpy scalars of the schema's dtypes)."""
+        i = self._check(i)
+        return {name: self.index[name][i] for name in SAMPLE_SCALARS}
+
+    # -- splits
+
+    @property
+    def splits(self) -> dict[str, np.ndarray]:
+        """Split name -> sample indices (int64, ascending), failed samples included."""
+        split = self.index["split"]
+        return {name: np.flatnonzero(split == code) for code, name in enumerate(SPLIT_NAMES)}
+
+    def split(self, name: str, *, include_failed: bool = True) -> np.ndarray:
+        """Sample indices of split ``name`` (``train``, ``val``, ``test``)."""
+        if name not in SPLIT_NAMES:
+            raise InputError(f"unknown split {name!r}; splits are {list(SPLIT_NAMES)}")
+        mask = self.index["split"] == SPLIT_NAMES.index(name)
+        if not include_failed:
+            mask &= self.index["failure"] == 0
+        return np.flatnonzero(mask)
+
+    def iter_split(self, name: str, *, names: Sequence[str] | None = None, include_failed: bool = True
+                   ) -> Iterator[tuple[int, dict[str, Any]]]:
+        """(index, :meth:`sample`) for every sample of split ``name``, in index order."""
+        for i in self.split(name, include_failed=include_failed):
+            yield int(i), self.sample(int(i), names=names)
+
+    # -- samples and frames
+
+    def sample(self, i: int, *, names: Sequence[str] | None = None) -> dict[str, Any]:
+        """Everything of sample ``i``: vertex-frame arrays [T, V, k], frame arrays [T, ...],
+        simulation-frame metrics [T_sim] and the scalars; ``names`` limits the arrays read."""
+        i = self._check(i)
+        names = self._names(names, VERTEX_FRAME_ARRAYS + FRAME_ARRAYS + SIM_FRAME_ARRAYS)
+        out = self._read_frames(i, 0, self.frame_count(i), [n for n in names if n not in SIM_FRAME_ARRAYS],
+                                extra=[n for n in names if n in SIM_FRAME_ARRAYS])
+        out.update(self.scalars(i))
+        return out
+
+    def frames(self, i: int, frames: slice | int | Sequence[int] = slice(None), *,
+               names: Sequence[str] | None = None) -> dict[str, np.ndarray]:
+        """Vertex-frame and frame arrays of some recorded frames of sample ``i``.
+
+        Args:
+            i: sample index.
+            frames: a slice, one frame, or frame indices (in any order) of the sample's T frames.
+            names: arrays to read (default: every vertex-frame and frame array).
+
+        Returns:
+            name -> [n, V, k] (vertex-frame) or [n, ...] (frame) for the n selected frames.
+        """
+        i = self._check(i)
+        T = self.frame_count(i)
+        names = self._names(names, VERTEX_FRAME_ARRAYS + FRAME_ARRAYS)
+        if isinstance(frames, slice):
+            start, stop, step = frames.indices(T)
+            if step == 1:
+                return self._read_frames(i, start, max(start, stop), names)
+            wanted = np.arange(start, stop, step)
+        else:
+            wanted = np.atleast_1d(np.asarray(frames, dtype=np.int64))
+            if wanted.ndim != 1:
+                raise InputError(f"frames must be a slice, an int or a 1-D list of ints, got shape {wanted.shape}")
+            if wanted.size and (wanted.min() < -T or wanted.max() >= T):
+                raise IndexError(f"frames {wanted.tolist()} out of range for sample {i} with {T} frames")
+            wanted = np.where(wanted < 0, wanted + T, wanted)
+        if wanted.size == 0:
+            return self._read_frames(i, 0, 0, names)
+        lo, hi = int(wanted.min()), int(wanted.max()) + 1
+        if hi - lo <= 2 * wanted.size:  # read the covering range once, then pick
+            block = self._read_frames(i, lo, hi, names)
+            return {n: a[wanted - lo] for n, a in block.items()}
+        parts = [self._read_frames(i, int(t), int(t) + 1, names) for t in wanted]
+        return {n: np.concatenate([p[n] for p in parts]) for n in names}
+
+    def metrics(self, i: int, *, names: Sequence[str] | None = None) -> dict[str, np.ndarray]:
+        """Simulation-frame metrics of sample ``i``, each [T_sim]."""
+        i = self._check(i)
+        return self._read_frames(i, 0, 0, [], extra=self._names(names, SIM_FRAME_ARRAYS))
+
+    def _names(self, names: Sequence[str] | None, allowed: tuple[str, ...]) -> list[str]:
+        if names is None:
+            return list(allowed)
+        unknown = [n for n in names if n not in allowed]
+        if unknown:
+            raise InputError(f"unknown array name(s) {unknown}; choose from {list(allowed)}")
+        return list(names)
+
+    def _read_frames(self, i: int, t0: int, t1: int, names: Sequence[str], extra: Sequence[str] = ()
+                     ) -> dict[str, np.ndarray]:
+        idx = self.index
+        V = int(idx["vertex_count"][i])
+        f0 = int(idx["frame_start"][i])
+        v0 = int(idx["vertex_start"][i])
+        s0, s1 = int(idx["sim_frame_start"][i]), int(idx["sim_frame_start"][i + 1])
+        requests, shapes = [], []
+        for n in names:
+            if n in VERTEX_FRAME_ARRAYS:
+                requests.append((_PATH[n], v0 + t0 * V, v0 + t1 * V))
+                shapes.append((t1 - t0, V, -1))
+            else:
+                requests.append((_PATH[n], f0 + t0, f0 + t1))
+                shapes.append(None)
+        for n in extra:
+            requests.append((_PATH[n], s0, s1))
+            shapes.append(None)
+        data = self.rows.read_many(requests) if requests else []
+        out = {}
+        for n, a, shape in zip([*names, *extra], data, shapes, strict=True):
+            a = np.asarray(a, dtype=_DTYPE[n])
+            out[n] = a.reshape(shape[0], shape[1], a.shape[-1]) if shape is not None else a
+        return out
+
+    # -- segments
+
+    @property
+    def segments(self) -> np.ndarray:
+        """(sample, first frame) of every segment, [n_segments, 2] int64."""
+        return self.index["segments"]
+
+    @property
+    def segment_count(self) -> int:
+        return len(self.index["segments"])
+
+    def split_segments(self, name: str) -> np.ndarray:
+        """Segment indices whose sample is in split ``name``."""
+        if name not in SPLIT_NAMES:
+            raise InputError(f"unknown split {name!r}; splits are {list(SPLIT_NAMES)}")
+        seg = self.index["segments"]
+        return np.flatnonzero(self.index["split"][seg[:, 0]] == SPLIT_NAMES.index(name)) if len(seg) else seg[:, 0]
+
+    def segment(self, k: int, *, names: Sequence[str] | None = None) -> dict[str, Any]:
+        """Segment ``k``: :meth:`frames` of its ``segment_length`` frames, the sample's scalars, and
+        ``sample`` and ``first_frame``."""
+        seg = self.index["segments"]
+        if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < len(seg):
+            raise IndexError(f"segment {k!r} is not in 0 .. {len(seg) - 1}")
+        i, t0 = int(seg[k, 0]), int(seg[k, 1])
+        out = self.frames(i, slice(t0, t0 + self.segment_length), names=names)
+        out.update(self.scalars(i))
+        out["sample"], out["first_frame"] = i, t0
+        return out
+
+    # -- static groups
+
+    @property
+    def garment_count(self) -> int:
+        return len(self.index["garment_vertex_start"]) - 1
+
+    def garment(self, g: int) -> dict[str, Any]:
+        """Garment instance ``g``: rest mesh (``rest_vertices`` [V, 3] m, ``faces`` [F, 3] local
+        indices, ``uv``, ``region``, ``seam``, ``indicator``, ``skin_weights``) and its attributes
+        (``type``, ``seed``, ``body``, ``material``, ``alpha`` [3], ``rest_area``)."""
+        if isinstance(g, bool) or not isinstance(g, (int, np.integer)) or not 0 <= g < self.garment_count:
+            raise IndexError(f"garment instance {g!r} is not in 0 .. {self.garment_count - 1}")
+        vs, fs = self.index["garment_vertex_start"], self.index["garment_face_start"]
+        specs = [a for a in ARRAYS.values() if a.group == "garments" and a.table != "offset"]
+        requests = []
+        for a in specs:
+            start, stop = ((vs[g], vs[g + 1]) if a.table == "garment_vertex" else
+                           (fs[g], fs[g + 1]) if a.table == "garment_face" else (g, g + 1))
+            requests.append((a.path, int(start), int(stop)))
+        data = self.rows.read_many(requests)
+        return {a.name: (d if a.table != "garment" else d[0]) for a, d in zip(specs, data, strict=True)}
+
+    def group(self, name: str) -> dict[str, np.ndarray]:
+        """Every array of a static group (``body``, ``bodies``, ``motions``, ``garments``, ``fit``), whole."""
+        if name not in STATIC_GROUPS:
+            raise InputError(f"unknown static group {name!r}; groups are {list(STATIC_GROUPS)}")
+        return {a.name: self.rows.read_all(a.path) for a in ARRAYS.values() if a.group == name}
+
+    def body_model(self) -> dict[str, np.ndarray]:
+        """The SMPL-format body model: ``v_template`` [B, 3], ``shapedirs`` [B, 3, S], ``J_regressor``
+        [J, B], ``weights`` [B, J], ``parents`` [J], ``faces`` [Fb, 3]."""
+        return self.group("body")
+
+    def betas(self) -> np.ndarray:
+        """Shape coefficients of every body, [n_bodies, S]."""
+        return self.rows.read_all("bodies/betas")
+
+    def motions(self) -> dict[str, np.ndarray]:
+        """Motion tables: ``label``, ``seed``, ``frame_count``, each [M]."""
+        return self.group("motions")
+
+    def fit_model(self) -> dict[str, np.ndarray]:
+        """The fit-attribute factor-analysis model: ``components`` [3, D], ``mean`` [D],
+        ``noise_variance`` [D], ``subsample`` [D]."""
+        return self.group("fit")
