@@ -85,7 +85,7 @@ def synthetic_static(G: int, V: int, B: int, S: int = 10, D: int = 256, seed: in
                       "rest_area": np.ones(G, f32)},
                      {"garment_type_names": ["tshirt"], "material_names": ["cotton"], "region_names": ["panel0"]}),
         "fit": ({"components": rng.normal(size=(3, D)).astype(f32), "mean": rng.normal(size=D).astype(f32),
-                 "noise_variance": rng.random(D).astype(f32), "subsample": np.arange(D, dtype=np.int32)}, {}),
+                 "noise_variance": rng.random(D).astype(f32), "subsample": np.array([1, D, 0], dtype=np.int64)}, {}),
     }, V_g
 
 

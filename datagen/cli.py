@@ -35,12 +35,14 @@ def build_parser() -> argparse.ArgumentParser:
     from datagen.body import cli as body_cli
     from datagen.garment import cli as garment_cli
     from datagen.motion import cli as motion_cli
+    from datagen.generate import cli as generate_cli
     from datagen.sim import cli as sim_cli
 
     body_cli.register(sub, _Formatter)
     motion_cli.register(sub, _Formatter)
     garment_cli.register(sub, _Formatter)
     sim_cli.register(sub, _Formatter)
+    generate_cli.register(sub, _Formatter)
     return parser
 
 

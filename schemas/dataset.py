@@ -301,7 +301,9 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
     _static("fit/components", (3, "D"), "float32", "m", "factor loadings (in the features' unit)"),
     _static("fit/mean", ("D",), "float32", "m", "feature mean"),
     _static("fit/noise_variance", ("D",), "float32", "m²", "per-feature noise variance"),
-    _static("fit/subsample", ("D",), "int32", "index", "what each feature was sampled from", minimum=0),
+    _static("fit/subsample", (3,), "int64", "1",
+            "(rule version, N_g*, seed) of the even subsampling that picks the D features (datagen.targets.fit)",
+            minimum=0),
 )
 
 ARRAYS: dict[str, ArraySpec] = {a.path: a for a in _ARRAY_LIST}

@@ -491,6 +491,11 @@ class _Checker:
             if v is not None:
                 keys[what] = v[:, None]
         names = self.attrs.get("split_names") or list(SPLIT_NAMES)
+        config = self.attrs.get("config") if isinstance(self.attrs.get("config"), dict) else {}
+        # the config says what splits must not share (paper 001 splits by motion only)
+        disjoint = set(config.get("split_disjoint", ("garments", "bodies", "motions")))
+        kinds = {"garment instance (type, seed)": "garments", "body": "bodies", "motion": "motions"}
+        keys = {what: key for what, key in keys.items() if kinds[what] in disjoint}
         for what, key in keys.items():
             first: dict[tuple, tuple[int, int]] = {}
             shared = 0

@@ -65,7 +65,7 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
     }
     D = 12
     fit = {"components": rng.normal(size=(3, D)).astype(f32), "mean": rng.normal(size=D).astype(f32),
-           "noise_variance": rng.random(D).astype(f32), "subsample": np.arange(D, dtype=np.int32) * 2}
+           "noise_variance": rng.random(D).astype(f32), "subsample": np.array([1, D, 0], dtype=np.int64)}
     return {
         "body": (body, {}),
         "bodies": (bodies, {"body_names": [f"body-{k}" for k in range(n_bodies)]}),
