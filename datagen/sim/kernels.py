@@ -166,6 +166,25 @@ def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
     v[i] = (x[i] - x_prev[i]) / h
 
 
+@wp.func
+def body_surface_point(f: int, u: float, v: float, body_faces: wp.array2d(dtype=wp.int32),
+                       body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3)):
+    """The point at barycentric (u, v) of body face f now, the face's unit normal (zero for a
+    degenerate face) and the point's displacement since ``body_prev``."""
+    a = body_faces[f, 0]
+    b = body_faces[f, 1]
+    c = body_faces[f, 2]
+    w2 = 1.0 - u - v
+    p = body_now[a] * u + body_now[b] * v + body_now[c] * w2
+    n = wp.cross(body_now[b] - body_now[a], body_now[c] - body_now[a])
+    ln = wp.length(n)
+    if ln < 1.0e-20:
+        n = wp.vec3(0.0)
+    else:
+        n = n / ln
+    return p, n, p - (body_prev[a] * u + body_prev[b] * v + body_prev[c] * w2)
+
+
 @wp.kernel
 def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
                         scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
@@ -187,20 +206,10 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
     q = wp.mesh_query_point_sign_winding_number(mesh, x[i], query, 2.0, 0.5)
     if not q.result or q.sign >= 0.0:
         return
-    f = body_face_base[s] + q.face
-    a = body_faces[f, 0]
-    b = body_faces[f, 1]
-    c = body_faces[f, 2]
-    w0 = q.u
-    w1 = q.v
-    w2 = 1.0 - q.u - q.v
-    p = body_now[a] * w0 + body_now[b] * w1 + body_now[c] * w2
-    n = wp.cross(body_now[b] - body_now[a], body_now[c] - body_now[a])
-    ln = wp.length(n)
-    if ln < 1.0e-20:
+    p, n, disp = body_surface_point(body_face_base[s] + q.face, q.u, q.v, body_faces, body_prev, body_now)
+    if wp.length(n) == 0.0:
         return
-    n = n / ln
-    vb = (p - (body_prev[a] * w0 + body_prev[b] * w1 + body_prev[c] * w2)) / h
+    vb = disp / h
     r = radius[i]
     if wp.dot(x[i] - p, n) < 0.25 * r:
         x[i] = p + n * (0.5 * r)
@@ -274,23 +283,13 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     q = wp.mesh_query_point_no_sign(body_meshes[s], x[i], query)
     if not q.result:
         return
-    f = body_face_base[s] + q.face
-    a = body_faces[f, 0]
-    b = body_faces[f, 1]
-    c = body_faces[f, 2]
-    w0 = q.u
-    w1 = q.v
-    w2 = 1.0 - q.u - q.v
-    p = body_now[a] * w0 + body_now[b] * w1 + body_now[c] * w2
-    n = wp.cross(body_now[b] - body_now[a], body_now[c] - body_now[a])
-    ln = wp.length(n)
-    if ln < 1.0e-20:
+    p, n, disp = body_surface_point(body_face_base[s] + q.face, q.u, q.v, body_faces, body_prev, body_now)
+    if wp.length(n) == 0.0:
         return
     has[i] = 1
-    n = n / ln
     point[i] = p
     normal[i] = n
-    body_disp[i] = p - (body_prev[a] * w0 + body_prev[b] * w1 + body_prev[c] * w2)
+    body_disp[i] = disp
     d = wp.dot(x[i] - p, n)
     if active[i] != 0 and d < radius[i] and d > -2.0 * radius[i]:
         push = n * (radius[i] - d)
