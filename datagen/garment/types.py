@@ -31,7 +31,7 @@ MIN_CLEARANCE = 0.008
 MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
-BUILDER_VERSION = 1
+BUILDER_VERSION = 2
 
 
 _TOP = {
@@ -66,7 +66,7 @@ GARMENT_TYPES: dict[str, dict] = {
                           "ease_waist": ParamSpec(0.04, 0.08, "clearance at the waist (m)"),
                           "ease_hip": ParamSpec(0.035, 0.07, "clearance at the hips (m)"),
                           "sleeve_length": ParamSpec(0.4, 0.47, "sleeve from the shoulder joint (m)"),
-                          "opening": ParamSpec(0.02, 0.08, "width of the open front (m)")},
+                          "opening": ParamSpec(0.04, 0.12, "width of the open front (m)")},
                "material": "denim", "loops": 3},
     "coat": {"params": {**_TOP, **_SLEEVE, **_SKIRT,
                         "ease_chest": ParamSpec(0.04, 0.07, "clearance at the chest (m)"),
@@ -75,7 +75,7 @@ GARMENT_TYPES: dict[str, dict] = {
                         "sleeve_length": ParamSpec(0.28, 0.36, "3/4 sleeve from the shoulder joint (m)"),
                         "hem": ParamSpec(0.35, 0.5, "hem below the hip joints (m), about the knee"),
                         "flare": ParamSpec(0.05, 0.2, "widening per metre below the hips"),
-                        "opening": ParamSpec(0.02, 0.08, "width of the open front (m)")},
+                        "opening": ParamSpec(0.04, 0.12, "width of the open front (m)")},
              "material": "wool", "loops": 3},
     "dress": {"params": {**_TOP, **_SKIRT,
                          "armhole_drop": ParamSpec(0.02, 0.06, "armhole below the armpit line (m)"),
@@ -344,7 +344,10 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
                 armpit = sh[1] - 0.07 - p["armhole_drop"]
                 cuts.append(np.maximum((sh[0] + 0.005) - np.abs(x), armpit - y))
             if "opening" in p:
-                cuts.append(np.maximum(np.abs(x) - p["opening"] / 2, (hzc + 0.02) - z))
+                # at least 2 grid steps either side of the mid-plane: a narrower slot is not
+                # resolved by marching cubes everywhere and a bridge of cloth closes the front
+                half = max(p["opening"] / 2, 2.0 * spacing)
+                cuts.append(np.maximum(np.abs(x) - half, (hzc + 0.02) - z))
         else:
             cuts.append((waist_y - p["waist"]) - y)
         return np.minimum.reduce(cuts)
