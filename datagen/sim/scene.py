@@ -194,6 +194,31 @@ def load_scene_arrays(path) -> list[SceneArrays]:
     return out
 
 
+def frame_schedule(config: RunConfig, lead: int, n_motion: int, fps: float) -> tuple[list[float], int]:
+    """The body source frame (fractional: interpolated) of every simulated frame, and the first
+    recorded frame: settle at rest, lead-in, settle in the first pose, ramp, then the motion.
+
+    Args:
+        config: the run's phases.
+        lead: lead-in frames at the start of the body frames.
+        n_motion: body frames in all (lead-in included).
+        fps: frame rate.
+    """
+    ramp, motion_from = config.ramp_frames(fps)
+    schedule = ([0.0] * config.settle_rest + [float(i) for i in range(1, lead + 1)] + [float(lead)] * config.settle_pose
+                + [lead + i * i / (2.0 * ramp) for i in range(1, ramp + 1)]
+                + [float(i) for i in range(lead + motion_from + 1, n_motion)])
+    # the first recorded frame is motion frame ``motion_from``: the last of the ramp (or of the pose settle)
+    return schedule, config.settle_rest + lead + config.settle_pose + ramp - 1
+
+
+def body_at(frames: np.ndarray, src: float) -> np.ndarray:
+    """Body vertices at fractional frame ``src`` of ``frames`` [N, B, 3] (linear between frames)."""
+    i0 = int(np.floor(src))
+    w = src - i0
+    return frames[i0] if w == 0 else (1 - w) * frames[i0] + w * frames[i0 + 1]
+
+
 def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(), device: str | None = None,
              progress=None) -> list[SceneResult]:
     """Run a batch of scenes in one model (one set of launches); see the module doc for the phases.
@@ -227,12 +252,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     if lead + motion_from >= n_motion:
         raise InputError(f"the motion has {n_motion - lead} frames; the ramp of {config.ramp:g} s plays {motion_from} "
                          f"of them before recording starts: give it more frames or a shorter ramp")
-    # body source frame (fractional: interpolated) of every simulated frame
-    schedule = ([0.0] * config.settle_rest + [float(i) for i in range(1, lead + 1)] + [float(lead)] * config.settle_pose
-                + [lead + i * i / (2.0 * ramp) for i in range(1, ramp + 1)]
-                + [float(i) for i in range(lead + motion_from + 1, n_motion)])
-    # the first recorded frame is motion frame ``motion_from``: the last of the ramp (or of the pose settle)
-    recorded_from = config.settle_rest + lead + config.settle_pose + ramp - 1
+    schedule, recorded_from = frame_schedule(config, lead, n_motion, fps)
     control = BodyControl.from_numpy(model, np.concatenate([b[0] for b in body_frames]))
     solver.reset_body(control)
     series = {k: [] for k in METRIC_NAMES}
@@ -242,9 +262,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     start = time.perf_counter()
     dt = 1.0 / fps
     for f, src in enumerate(schedule):
-        i0 = int(np.floor(src))
-        w = src - i0
-        control.set(np.concatenate([b[i0] if w == 0 else (1 - w) * b[i0] + w * b[i0 + 1] for b in body_frames]))
+        control.set(np.concatenate([body_at(b, src) for b in body_frames]))
         solver.step(state_a, state_b, control, dt)
         state_a, state_b = state_b, state_a
         frame = metrics.measure(state_a, solver)
@@ -257,7 +275,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                     failure[s], failure_frame[s] = why, f
                     log.warning("scene %d failed at frame %d: %s", s, f, why)
         if f >= recorded_from:
-            positions.append(state_a.positions.numpy())
+            positions.append(state_a.positions.numpy().copy())  # on the CPU .numpy() is a view of the buffer
         if progress:
             progress(f + 1, len(schedule))
     seconds = time.perf_counter() - start

@@ -37,7 +37,8 @@ class ClothState:
         self.pinned_target.assign(other.pinned_target)
 
     def numpy(self) -> tuple[np.ndarray, np.ndarray]:
-        return self.positions.numpy(), self.velocities.numpy()
+        """Copies of the positions and velocities (on the CPU, warp's .numpy() is a view of the buffer)."""
+        return self.positions.numpy().copy(), self.velocities.numpy().copy()
 
 
 @dataclass
