@@ -33,9 +33,10 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     from datagen.body import cli as body_cli
+    from datagen.export import cli as export_cli
     from datagen.garment import cli as garment_cli
-    from datagen.motion import cli as motion_cli
     from datagen.generate import cli as generate_cli
+    from datagen.motion import cli as motion_cli
     from datagen.sim import cli as sim_cli
 
     body_cli.register(sub, _Formatter)
@@ -43,6 +44,7 @@ def build_parser() -> argparse.ArgumentParser:
     garment_cli.register(sub, _Formatter)
     sim_cli.register(sub, _Formatter)
     generate_cli.register(sub, _Formatter)
+    export_cli.register(sub, _Formatter)
     return parser
 
 

@@ -29,9 +29,15 @@ def register(sub, formatter) -> None:
                        "fit model of a store; exit 1 and list every problem if any.")
     p.add_argument("store")
     p.set_defaults(func=_cmd_validate)
-    p = sub.add_parser("info", formatter_class=formatter, help="splits, counts, sizes and failures of a store")
+    p = sub.add_parser("info", formatter_class=formatter, help="splits, counts, sizes and failures of a store",
+                       description="Print a store's splits, sample and frame counts, sizes on disk and failures; "
+                       "with --plots also write PNG plots: samples per split, garment vertex counts, failure "
+                       "reasons, and the distributions of the fit attribute α (per component) and of β.",
+                       epilog="examples:\n  drape info tiny.zarr\n  drape info tiny.zarr --json\n"
+                       "  drape info tiny.zarr --plots plots/   (splits, vertex_counts, failures, alpha, betas .png)")
     p.add_argument("store")
     p.add_argument("--json", action="store_true")
+    p.add_argument("--plots", default=None, metavar="DIR", help="also write PNG plots into this directory")
     p.set_defaults(func=_cmd_info)
 
 
@@ -94,4 +100,10 @@ def _cmd_info(args) -> int:
 
     info = store_info(args.store)
     print(json.dumps(info, indent=2, default=str) if args.json else format_store_info(info))
+    if args.plots is not None:
+        from datagen.store import plot_store_info
+
+        written = plot_store_info(args.store, args.plots)
+        print(f"wrote {len(written)} plots to {args.plots}: {', '.join(p.name for p in written)}",
+              file=sys.stderr if args.json else sys.stdout)
     return 0

@@ -7,7 +7,9 @@ metres) and ``extent`` are time-sampled, one sample per frame at time code ``k``
 ``/Body/Bones``, a linear ``UsdGeom.BasisCurves`` with one two-point segment per SMPL bone (parent
 joint to joint), time-sampled: a visual aid for checking the motion, not a UsdSkel rig.
 
-USD needs the optional ``usd-core`` package (``pip install 'drape[usd]'``).
+The stage set-up, the atomic write and :func:`usd_validation_errors` are shared with
+:mod:`datagen.export.usd` (and re-exported here). USD needs the optional ``usd-core`` package
+(``pip install 'drape[usd]'``).
 """
 
 from __future__ import annotations
@@ -20,15 +22,14 @@ import numpy as np
 
 from datagen.body.skeleton import SMPL_PARENTS
 from datagen.errors import InputError, require
+from datagen.export.files import check_output_path
+from datagen.export.usd import BODY_COLOR, USD_SUFFIXES, define_mesh, new_stage, save_stage, usd_validation_errors
 from datagen.motion.bvh import write_bvh
 from datagen.motion.motion import Motion
 
 __all__ = ["USD_SUFFIXES", "usd_validation_errors", "write_motion_bvh", "write_motion_usd"]
 
 logger = logging.getLogger(__name__)
-
-USD_SUFFIXES = (".usd", ".usda", ".usdc")
-"""File name endings :func:`write_motion_usd` writes (``.usd`` is binary crate)."""
 
 POSE_CHUNK_FRAMES = 64
 """Frames posed per call of ``body_model.pose`` (bounds memory to about 64 x V x 3 float64)."""
@@ -73,31 +74,14 @@ def write_motion_usd(motion: Motion, path: str | os.PathLike, body_model, betas=
 
     if not isinstance(motion, Motion):
         raise InputError(f"motion must be a datagen Motion, got {type(motion).__name__}")
-    path = Path(path)
-    if path.suffix.lower() not in USD_SUFFIXES:
-        raise InputError(f"USD file {path} must end in one of {', '.join(USD_SUFFIXES)}")
-    if not path.parent.is_dir():
-        raise InputError(f"directory {path.parent} does not exist; create it first")
-    faces = np.asarray(body_model.faces)
-    if path.exists():
-        path.unlink()  # CreateNew refuses an existing layer
-    stage = Usd.Stage.CreateNew(str(path))
-    UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.y)
-    UsdGeom.SetStageMetersPerUnit(stage, 1.0)
-    stage.SetTimeCodesPerSecond(motion.fps)
-    stage.SetFramesPerSecond(motion.fps)
-    stage.SetStartTimeCode(0)
-    stage.SetEndTimeCode(motion.frame_count - 1)
-    root = UsdGeom.Xform.Define(stage, "/Body")
-    stage.SetDefaultPrim(root.GetPrim())
+    path = check_output_path(path, USD_SUFFIXES, "USD file")
+    stage, root = new_stage(motion.fps, motion.frame_count, "/Body",
+                            documentation=f"drape motion {motion.label_name!r}: {motion.frame_count} frames at "
+                            f"{motion.fps:g} fps")
     root.GetPrim().SetCustomDataByKey("drape:label_name", motion.label_name)
     root.GetPrim().SetCustomDataByKey("drape:label", motion.label)
 
-    mesh = UsdGeom.Mesh.Define(stage, "/Body/Skin")
-    mesh.CreateFaceVertexCountsAttr(Vt.IntArray.FromNumpy(np.full(len(faces), 3, dtype=np.int32)))
-    mesh.CreateFaceVertexIndicesAttr(Vt.IntArray.FromNumpy(faces.reshape(-1).astype(np.int32)))
-    mesh.CreateSubdivisionSchemeAttr(UsdGeom.Tokens.none)
-    mesh.CreateDisplayColorAttr(Vt.Vec3fArray([Gf.Vec3f(0.80, 0.65, 0.55)]))
+    mesh = define_mesh(stage, "/Body/Skin", np.asarray(body_model.faces), color=BODY_COLOR)
     points = mesh.CreatePointsAttr()
     extent = mesh.CreateExtentAttr()
     bones = None
@@ -124,9 +108,7 @@ def write_motion_usd(motion: Motion, path: str | os.PathLike, body_model, betas=
                 seg = np.stack([joints[i, parent], joints[i, child]], axis=1).reshape(-1, 3).astype(np.float32)
                 bone_points.Set(Vt.Vec3fArray.FromNumpy(seg), t)
                 bone_extent.Set(Vt.Vec3fArray.FromNumpy(np.stack([seg.min(0), seg.max(0)])), t)
-    layer = stage.GetRootLayer()
-    layer.documentation = f"drape motion {motion.label_name!r}: {motion.frame_count} frames at {motion.fps:g} fps"
-    layer.Save()
+    save_stage(stage, path)
     logger.info("wrote USD %s: %d frames at %g fps, %d vertices", path, motion.frame_count, motion.fps,
                 body_model.vertex_count)
     return path
@@ -144,31 +126,3 @@ def write_motion_bvh(motion: Motion, path: str | os.PathLike, body_model, betas=
     """
     b = _check_betas(body_model, betas)
     return write_bvh(motion, path, body_model.rest_joints(b)[0])
-
-
-def usd_validation_errors(path: str | os.PathLike) -> list[str]:
-    """Problems that usd-core's validators find in the USD file at ``path`` (empty: none).
-
-    Uses ``pxr.UsdValidation`` (usd-core >= 24.11: every registered validator, run on the
-    stage) when present, else ``pxr.UsdUtils.ComplianceChecker`` (errors and failed checks).
-    """
-    require("pxr", "USD validation", extra="usd")
-    from pxr import Usd
-
-    try:
-        from pxr import UsdValidation
-    except ImportError:
-        UsdValidation = None
-    if UsdValidation is not None:
-        validators = UsdValidation.ValidationRegistry().GetOrLoadAllValidators()
-        stage = Usd.Stage.Open(os.fspath(path))
-        errors = UsdValidation.ValidationContext(validators).Validate(stage)
-        return [e.GetErrorAsString() for e in errors
-                if not e.HasNoError() and e.GetType() != UsdValidation.ValidationErrorType.Info]
-    try:
-        from pxr.UsdUtils.complianceChecker import ComplianceChecker
-    except ImportError:
-        from pxr.UsdUtils import ComplianceChecker  # type: ignore[attr-defined, no-redef]
-    checker = ComplianceChecker()
-    checker.CheckCompliance(os.fspath(path))
-    return list(checker.GetErrors()) + list(checker.GetFailedChecks())

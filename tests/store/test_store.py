@@ -247,6 +247,34 @@ def test_info_summarises_splits_sizes_failures(packed, tmp_path):
     assert "NOT PACKED" in format_store_info(partial)
 
 
+def test_info_plots_write_one_png_per_view_of_the_store(packed, tmp_path, capsys):
+    pytest.importorskip("matplotlib", reason="plots need matplotlib (pip install 'drape[render]')")
+    from PIL import Image
+
+    from datagen.cli import main
+    from datagen.store import plot_store_info
+    from datagen.store.info import PLOT_FILES
+
+    written = plot_store_info(packed, tmp_path / "plots" / "nested")
+    assert [p.name for p in written] == list(PLOT_FILES)
+    assert sorted(p.name for p in (tmp_path / "plots" / "nested").iterdir()) == sorted(PLOT_FILES)
+    for p in written:
+        with Image.open(p) as im:
+            assert im.format == "PNG" and im.size[0] >= 400 and im.size[1] >= 250
+            pixels = np.asarray(im.convert("RGB"))
+        assert (pixels.std(axis=(0, 1)) > 5).any()  # not a blank page
+    assert main(["info", str(packed), "--plots", str(tmp_path / "cli")]) == 0
+    assert f"wrote {len(PLOT_FILES)} plots" in capsys.readouterr().out
+    assert sorted(p.name for p in (tmp_path / "cli").iterdir()) == sorted(PLOT_FILES)
+    writer = sl.open_writer(tmp_path / "partial", N, durable=False)
+    writer.stage_sample(0, *sl.sample(0))
+    with pytest.raises(InputError, match="not complete"):
+        plot_store_info(tmp_path / "partial", tmp_path / "p2")
+    (tmp_path / "afile").write_text("x")
+    with pytest.raises(InputError, match="not a directory"):
+        plot_store_info(packed, tmp_path / "afile")
+
+
 # ------------------------------------------------------------------------------------ refusals
 
 

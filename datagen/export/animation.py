@@ -1,0 +1,363 @@
+"""The arrays of one animated scene (a body and a garment over T frames) and where they come from.
+
+:class:`Animation` is what the exporters draw and write. Three sources make one:
+
+- a dataset store sample (:func:`from_store`): the simulated garment (``detail``), the posed
+  body, the garment instance's rest mesh and region labels, the pose and translation, and, for a
+  UsdSkel rig, the store's body model (rest shape from the sample's betas, skinning weights);
+- a ``drape simulate`` result (:func:`from_npz`, an ``.npz`` with ``positions``, ``faces``,
+  ``motion_from`` and the ``garment``, ``motion`` and ``body`` names): the body is posed again from
+  the named preset and motion on the default body (the file does not hold it), and the garment is
+  made again to get its regions and rest shape (used only if its faces equal the file's);
+- plain arrays (:func:`from_npz`, an ``.npz`` with ``garment_vertices``), e.g. a model's
+  prediction: ``garment_vertices`` [T, V, 3], ``garment_faces`` [F, 3], ``body_vertices``
+  [T, B, 3], ``body_faces`` [Fb, 3], ``fps``; optional ``region`` [V], ``region_names`` [R]
+  (strings), ``garment_rest`` [V, 3], and for a rig ``pose`` [T, 24, 3], ``trans`` [T, 3],
+  ``rest_joints`` [24, 3], optionally ``rest_body_vertices`` [B, 3] and ``skin_weights`` [B, 24].
+
+:func:`load_animation` picks the loader from the path (a store directory or an ``.npz``).
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import os
+from dataclasses import dataclass, field, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from datagen.errors import InputError
+from datagen.export.usd import SkeletonAnimation
+
+__all__ = ["Animation", "check_sample", "from_npz", "from_store", "load_animation", "parse_frames"]
+
+logger = logging.getLogger(__name__)
+
+DEFAULT_FPS = 30.0
+"""Frame rate of ``drape simulate`` and of the dataset presets, used where a source does not say."""
+
+
+@dataclass
+class Animation:
+    """A body and a garment over the same T frames, plus what is known about them.
+
+    Attributes:
+        body_vertices: posed body [T, B, 3] (m), float32.
+        body_faces: body triangles [Fb, 3].
+        garment_vertices: garment [T, V, 3] (m), float32.
+        garment_faces: garment triangles [F, 3].
+        fps: frames per second.
+        region: region code per garment vertex [V], or None.
+        region_names: the names of the region codes, or None.
+        garment_rest: the garment's rest shape [V, 3] (m), or None (needed for stretch).
+        skeleton: the body's rig and motion, or None.
+        metadata: what the arrays are (source, sample, split, garment, body, motion, failure, ...).
+        title: a one-line description for pictures.
+        frame_numbers: the source's frame number of each of these frames [T] (None: 0 .. T-1).
+    """
+
+    body_vertices: np.ndarray
+    body_faces: np.ndarray
+    garment_vertices: np.ndarray
+    garment_faces: np.ndarray
+    fps: float
+    region: np.ndarray | None = None
+    region_names: tuple[str, ...] | None = None
+    garment_rest: np.ndarray | None = None
+    skeleton: SkeletonAnimation | None = None
+    metadata: dict[str, Any] = field(default_factory=dict)
+    title: str = ""
+    frame_numbers: np.ndarray | None = None
+
+    @property
+    def frame_count(self) -> int:
+        return int(self.garment_vertices.shape[0])
+
+    @property
+    def source_frames(self) -> np.ndarray:
+        """The source's frame number of each frame."""
+        return np.arange(self.frame_count) if self.frame_numbers is None else np.asarray(self.frame_numbers)
+
+    def frames(self, index: np.ndarray) -> Animation:
+        """The animation restricted to frames ``index`` (of these arrays)."""
+        index = np.asarray(index, dtype=np.int64)
+        sk = self.skeleton
+        if sk is not None:
+            sk = replace(sk, poses=np.asarray(sk.poses)[index], trans=np.asarray(sk.trans)[index])
+        return replace(self, body_vertices=self.body_vertices[index], garment_vertices=self.garment_vertices[index],
+                       skeleton=sk, frame_numbers=self.source_frames[index])
+
+    def write_usd(self, path: str | os.PathLike, *, skeleton: bool = False, normals: bool = True) -> Path:
+        """:func:`~datagen.export.usd.write_animation_usd` of these arrays."""
+        from datagen.export.usd import write_animation_usd
+
+        if skeleton and self.skeleton is None:
+            raise InputError("this source has no pose and joints to build a skeleton from")
+        return write_animation_usd(path, self.body_vertices, self.body_faces, self.garment_vertices,
+                                   self.garment_faces, self.fps, region=self.region, region_names=self.region_names,
+                                   skeleton=self.skeleton if skeleton else None, metadata=self.metadata,
+                                   normals=normals)
+
+
+# ------------------------------------------------------------------------------------- stores
+
+
+def check_sample(store, sample) -> int:
+    """``sample`` as a valid sample index of ``store``, else :class:`InputError` naming the range."""
+    n = len(store)
+    if isinstance(sample, bool) or not isinstance(sample, (int, np.integer)):
+        raise InputError(f"sample id must be an integer, got {sample!r}")
+    i = int(sample)
+    if not 0 <= i < n:
+        valid = f"0 .. {n - 1}" if n else "none: the store is empty"
+        raise InputError(f"sample {sample} is not in store {store.path}: valid sample ids are {valid}")
+    return i
+
+
+def parse_frames(spec: str | None, frame_count: int) -> np.ndarray:
+    """Frame indices from ``A:B[:step]`` (Python slice syntax; empty parts allowed) or ``N``.
+
+    Raises:
+        InputError: a malformed spec, or frames outside ``0 .. frame_count - 1``.
+    """
+    if frame_count < 1:
+        raise InputError("the sample has no frames")
+    if spec is None or spec.strip() in ("", ":"):
+        return np.arange(frame_count)
+    parts = spec.split(":")
+    try:
+        nums = [int(p) if p.strip() else None for p in parts]
+    except ValueError:
+        raise InputError(f"frames must be N or A:B[:step] with integers, got {spec!r}") from None
+    if len(parts) == 1:
+        k = nums[0]
+        if k is None or not -frame_count <= k < frame_count:
+            raise InputError(f"frame {spec} is out of range: valid frames are 0 .. {frame_count - 1}")
+        return np.array([k % frame_count])
+    if len(parts) > 3:
+        raise InputError(f"frames must be N or A:B[:step], got {spec!r}")
+    a, b = nums[0], nums[1]
+    step = nums[2] if len(nums) == 3 else None
+    if step is not None and step <= 0:
+        raise InputError(f"the frame step must be positive, got {step}")
+    for v in (a, b):
+        if v is not None and not -frame_count <= v <= frame_count:
+            raise InputError(f"frames {spec} are out of range: valid frames are 0 .. {frame_count - 1}")
+    index = np.arange(frame_count)[slice(a, b, step)]
+    if index.size == 0:
+        raise InputError(f"frames {spec} select no frame of 0 .. {frame_count - 1}")
+    return index
+
+
+def _name(names: tuple[str, ...], code: int) -> str:
+    return names[code] if 0 <= code < len(names) else f"code {code}"
+
+
+def from_store(store, sample: int, *, frames: np.ndarray | None = None, skeleton: bool = False,
+               allow_failed: bool = True) -> Animation:
+    """Sample ``sample`` of ``store`` (a path or an open :class:`~datagen.store.DatasetStore`).
+
+    Args:
+        store: the store.
+        sample: sample index.
+        frames: recorded frames to read (default all).
+        skeleton: also read the body model to build a :class:`SkeletonAnimation`.
+        allow_failed: a failed sample that has frames is loaded with a warning (else refused).
+
+    Raises:
+        InputError: an unknown sample id (the message gives the valid range), or a sample with no
+            recorded frames (failed samples keep only their metrics).
+    """
+    from datagen.store import open_store
+
+    if isinstance(store, (str, os.PathLike)):
+        store = open_store(store)
+    i = check_sample(store, sample)
+    sc = store.scalars(i)
+    names = store.names
+    failure = int(sc["failure"])
+    T = store.frame_count(i)
+    if failure:
+        what = (f"sample {i} failed ({_name(names['failure_names'], failure)} at simulated frame "
+                f"{int(sc['failure_frame'])})")
+        if T == 0:
+            raise InputError(f"{what} and has no recorded frames (a failed sample keeps only its metrics); "
+                             "nothing to export")
+        if not allow_failed:
+            raise InputError(what)
+        logger.warning("%s: exporting its %d recorded frames anyway", what, T)
+    index = np.arange(T) if frames is None else np.asarray(frames, dtype=np.int64)
+    want = ["detail", "body_vertices", "pose", "trans"]
+    x = store.frames(i, index, names=want)
+    g = int(sc["garment"])
+    garment = store.garment(g)
+    b, m = int(sc["body"]), int(sc["motion"])
+    motions = store.motions()
+    gtype = _name(names["garment_type_names"], int(garment["type"]))
+    body_name = _name(names["body_names"], b)
+    label = _name(names["label_names"], int(motions["label"][m]))
+    split = _name(names["split_names"], int(sc["split"]))
+    fps = float(store.config.get("fps", DEFAULT_FPS))
+    meta = {"source": str(store.path), "sample": i, "split": split, "garment_instance": g, "garment_type": gtype,
+            "garment_seed": int(garment["seed"]), "material": _name(names["material_names"], int(garment["material"])),
+            "alpha": [float(a) for a in garment["alpha"]], "body": body_name, "body_index": b,
+            "motion": label, "motion_seed": int(motions["seed"][m]), "motion_index": m,
+            "failure": _name(names["failure_names"], failure), "frames": T, "fps": fps}
+    body_faces = store.read("body/faces")
+    sk = None
+    if skeleton:
+        model = store.body_model()
+        betas = store.betas()[b].astype(np.float64)
+        S = len(betas)
+        rest_v = model["v_template"].astype(np.float64) + np.einsum("vcs,s->vc", model["shapedirs"][:, :, :S]
+                                                                    .astype(np.float64), betas)
+        rest_j = model["J_regressor"].astype(np.float64) @ rest_v
+        sk = SkeletonAnimation(poses=x["pose"], trans=x["trans"], rest_joints=rest_j, parents=model["parents"],
+                               rest_vertices=rest_v, weights=model["weights"])
+    title = f"sample {i} ({split}): {gtype} on {body_name}, {label}" + (
+        f" [failed: {meta['failure']}]" if failure else "")
+    return Animation(body_vertices=x["body_vertices"], body_faces=body_faces, garment_vertices=x["detail"],
+                     garment_faces=garment["faces"], fps=fps, region=garment["region"],
+                     region_names=tuple(names["region_names"]), garment_rest=garment["rest_vertices"], skeleton=sk,
+                     metadata=meta, title=title, frame_numbers=None if frames is None else index)
+
+
+# ------------------------------------------------------------------------------------- npz
+
+
+def quiet_warp() -> None:
+    """Keep warp's initialisation banner off stdout (it prints on first use; recent warp versions
+    have ``config.log_level``, older ones ``config.quiet``)."""
+    import warp as wp
+
+    if hasattr(wp.config, "log_level"):
+        wp.config.log_level = max(wp.config.log_level, getattr(wp, "LOG_WARNING", 30))
+    else:
+        wp.config.quiet = True
+
+
+def _scalar(d, key: str, default=None):
+    if key not in d:
+        return default
+    v = np.asarray(d[key])
+    return v.item() if v.ndim == 0 else v
+
+
+def from_npz(path: str | os.PathLike, *, motion_seed: int | None = None, garment_seed: int | None = None,
+             fps: float | None = None) -> Animation:
+    """An ``.npz`` of plain arrays or a ``drape simulate`` result (see the module docstring).
+
+    Args:
+        path: the file.
+        motion_seed, garment_seed, fps: for a ``drape simulate`` result, the ``--motion-seed``,
+            ``--garment-seed`` and ``--fps`` it was run with (the file does not record them;
+            defaults: 0, 0, 30, as ``drape simulate``'s). Values in the file win.
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{path} does not exist")
+    try:
+        d = dict(np.load(path, allow_pickle=False))
+    except (OSError, ValueError) as exc:
+        raise InputError(f"{path} is not a readable .npz file ({exc})") from None
+    if "garment_vertices" in d:
+        return _from_arrays(path, d, fps)
+    if {"positions", "faces", "motion", "body", "garment"} <= set(d):
+        return _from_simulation(path, d, motion_seed, garment_seed, fps)
+    raise InputError(f"{path} holds neither plain arrays ('garment_vertices', 'body_vertices', ...) nor a "
+                     f"'drape simulate' result ('positions', 'faces', 'motion', 'body', 'garment'); it has "
+                     f"{sorted(d)}")
+
+
+def _from_arrays(path: Path, d: dict, fps: float | None) -> Animation:
+    missing = [k for k in ("garment_vertices", "garment_faces", "body_vertices", "body_faces") if k not in d]
+    if missing:
+        raise InputError(f"{path} lacks {missing}; plain-array files need garment_vertices, garment_faces, "
+                         "body_vertices, body_faces (and fps)")
+    fps = float(_scalar(d, "fps", fps if fps is not None else DEFAULT_FPS))
+    sk = None
+    if {"pose", "trans", "rest_joints"} <= set(d):
+        from datagen.body.skeleton import SMPL_PARENTS
+
+        sk = SkeletonAnimation(poses=d["pose"], trans=d["trans"], rest_joints=d["rest_joints"],
+                               parents=d.get("parents", np.array(SMPL_PARENTS)),
+                               rest_vertices=d.get("rest_body_vertices"), weights=d.get("skin_weights"))
+    names = tuple(str(n) for n in d["region_names"]) if "region_names" in d else None
+    return Animation(body_vertices=np.asarray(d["body_vertices"], np.float32), body_faces=d["body_faces"],
+                     garment_vertices=np.asarray(d["garment_vertices"], np.float32), garment_faces=d["garment_faces"],
+                     fps=fps, region=d.get("region"), region_names=names, garment_rest=d.get("garment_rest"),
+                     skeleton=sk, metadata={"source": str(path), "fps": fps}, title=path.name)
+
+
+def _from_simulation(path: Path, d: dict, motion_seed, garment_seed, fps) -> Animation:
+    from datagen.body.cache import default_body
+    from datagen.body.shapes import resolve_betas
+    from datagen.garment.types import make_garment
+    from datagen.motion.library import make_motion
+
+    positions = np.asarray(d["positions"], np.float32)
+    if positions.ndim != 3 or positions.shape[0] == 0:
+        raise InputError(f"{path}: positions must be [T, V, 3] with T >= 1, got {positions.shape}")
+    T = positions.shape[0]
+    garment_name, motion_name, body_name = (str(_scalar(d, k)) for k in ("garment", "motion", "body"))
+    motion_seed = int(_scalar(d, "motion_seed", motion_seed if motion_seed is not None else 0))
+    garment_seed = int(_scalar(d, "garment_seed", garment_seed if garment_seed is not None else 0))
+    fps = float(_scalar(d, "fps", fps if fps is not None else DEFAULT_FPS))
+    motion_from = int(_scalar(d, "motion_from", 0))
+    failure = str(_scalar(d, "failure", ""))
+    if failure:
+        logger.warning("%s: the simulation failed (%s); exporting its recorded frames anyway", path, failure)
+    model = default_body()
+    betas = resolve_betas(model, body=body_name)[0]
+    # drape simulate made the motion with motion_from extra frames (its ramp) and recorded the rest
+    motion = make_motion(motion_name, seed=motion_seed, frames=T + motion_from, fps=fps)
+    poses, trans = motion.poses[motion_from:], motion.trans[motion_from:]
+    verts, _ = model.pose(np.repeat(betas[None], T, 0), poses.reshape(T, -1), trans)
+    rest_v = np.asarray(model.shaped(betas))[0]
+    sk = SkeletonAnimation(poses=poses, trans=trans, rest_joints=np.asarray(model.rest_joints(betas))[0],
+                           parents=model.parents, rest_vertices=rest_v, weights=model.weights)
+    region = names = rest = None
+    quiet_warp()  # the garment builder uses warp
+    garment = make_garment(garment_name, model, betas, seed=garment_seed)
+    if np.array_equal(np.asarray(garment.faces), np.asarray(d["faces"])):
+        region, names, rest = garment.vertex_region, tuple(garment.region_names), garment.vertices
+    else:
+        logger.warning("%s: %s seed %d made again does not have the file's faces (another --garment-seed?); "
+                       "writing no regions", path, garment_name, garment_seed)
+    config = {}
+    if "config" in d:
+        try:
+            config = json.loads(str(_scalar(d, "config")))
+        except ValueError:
+            config = {}
+    meta = {"source": str(path), "garment_type": garment_name, "garment_seed": garment_seed, "body": body_name,
+            "motion": motion_name, "motion_seed": motion_seed, "fps": fps, "frames": T,
+            "failure": failure or "ok", "recorded_from": int(_scalar(d, "recorded_from", 0)),
+            "motion_from": motion_from}
+    if config:
+        meta["run_config"] = json.dumps(config)
+    title = f"{path.name}: {garment_name} on {body_name}, {motion_name}" + (f" [failed: {failure}]" if failure else "")
+    return Animation(body_vertices=verts.astype(np.float32), body_faces=np.asarray(model.faces),
+                     garment_vertices=positions, garment_faces=np.asarray(d["faces"]), fps=fps, region=region,
+                     region_names=names, garment_rest=rest, skeleton=sk, metadata=meta, title=title)
+
+
+def load_animation(source: str | os.PathLike, sample: int | None = None, *, frames: np.ndarray | None = None,
+                   skeleton: bool = False, **npz_options) -> Animation:
+    """A store sample (``source`` a store directory, ``sample`` required) or an ``.npz``."""
+    source = Path(source)
+    if source.is_dir():
+        if sample is None:
+            raise InputError(f"{source} is a store: say which sample with --sample ID")
+        return from_store(source, sample, frames=frames, skeleton=skeleton)
+    if source.suffix.lower() == ".npz":
+        if sample is not None:
+            raise InputError(f"{source} holds one scene; --sample is for stores")
+        anim = from_npz(source, **npz_options)
+        return anim if frames is None else anim.frames(frames)
+    if not source.exists():
+        raise InputError(f"{source} does not exist")
+    raise InputError(f"{source} is neither a store directory nor an .npz file")
