@@ -28,7 +28,7 @@ def prepare(args) -> None:
     model = default_body()
     betas = resolve_betas(model, body="regular")[0]
     g = make_garment("tshirt", model, betas, seed=0, target_edge_length=args.edge)
-    motion, _lead = make_motion("walk", seed=0, frames=args.frames).with_lead_in(0.3)
+    motion, _lead = make_motion("walk", seed=0, frames=args.frames).with_lead_in(args.lead_in)
     poses = motion.poses.reshape(motion.frame_count, -1)
     verts, _ = model.pose(np.repeat(betas[None], motion.frame_count, 0), poses, motion.trans)
     shift = (verts[0] - np.asarray(model.shaped(betas[None]))[0]).mean(0)
@@ -99,7 +99,7 @@ def prepare_runs(args) -> None:
     betas = resolve_betas(model, body=args.body)[0]
     scenes, names = [], []
     for kind in args.garments.split(","):
-        g = make_garment(kind, model, betas, seed=args.garment_seed)
+        g = make_garment(kind, model, betas, seed=args.garment_seed, target_edge_length=args.edge)
         for label in args.motions.split(","):
             motion = make_motion(label, seed=args.motion_seed, frames=args.frames + RunConfig().ramp_frames(30.0)[1])
             scenes.append(Scene(garment=g, body=model, betas=betas, motion=motion))
@@ -152,6 +152,7 @@ def main() -> None:
     p.add_argument("--out", default="sim_inputs.npz")
     p.add_argument("--frames", type=int, default=30)
     p.add_argument("--edge", type=float, default=0.016, help="garment edge length (m): 0.016 gives about 4,000 vertices")
+    p.add_argument("--lead-in", type=float, default=0.3, help="seconds from the rest pose to the walk's first pose")
     p.set_defaults(func=prepare)
     p = sub.add_parser("run")
     p.add_argument("--inputs", default="sim_inputs.npz")
@@ -166,6 +167,7 @@ def main() -> None:
     p.add_argument("--frames", type=int, default=300)
     p.add_argument("--body", default="regular")
     p.add_argument("--garment-seed", type=int, default=0)
+    p.add_argument("--edge", type=float, default=None, help="garment edge length (m); default: the type's")
     p.add_argument("--motion-seed", type=int, default=0)
     p.set_defaults(func=prepare_runs)
     p = sub.add_parser("run-scenes", help="simulate prepared scenes in one batch, print their summaries")

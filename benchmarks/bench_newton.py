@@ -1,0 +1,321 @@
+"""drape's cloth solver and Newton's VBD cloth solver side by side, in one run, on the same scene.
+
+The scene is one of ``bench_sim.py prepare-runs``' (default: the T-shirt on the regular body
+walking, 30 fps), run as ``drape``'s pipeline runs it: settle at rest, lead-in from the rest pose,
+settle in the first pose, the 1 s ramp into the motion, then the motion (``frame_schedule`` in
+datagen/sim/scene.py). Both solvers get the same garment mesh, the same posed body mesh per frame
+(interpolated linearly within the frame, substep by substep), 10 substeps x 10 iterations, the same
+contact distances and stiffnesses, and the same material; batches of N copies of the scene run in
+one model (drape: scenes; Newton: worlds).
+
+    python benchmarks/bench_sim.py prepare-runs --out runs.pkl --frames 300
+    python benchmarks/bench_newton.py --inputs runs.pkl --scene tshirt/walk --device cuda --batches 1,16
+
+Printed per solver, batch size and self-collision on/off: ms per frame, garment-frames per second,
+and over every frame of scene 0 (measured by drape's metrics, the same code for both): frames with
+a vertex inside the body (of the recorded frames: after the ramp), the most such vertices and the deepest, the most self-intersections
+(edge-triangle crossings), the largest single-triangle stretch, and NaN.
+
+How Newton's side is set up (newton 1.8):
+- the garment is ``ModelBuilder.add_cloth_mesh`` with StVK Lamé parameters from the material's
+  2D Young's modulus E and Poisson ratio nu (plane stress: mu = E / 2(1 + nu), lambda = E nu /
+  (1 - nu^2)), its bending stiffness as ``edge_ke`` and its density; ``builder.color()``;
+- the body is a mesh shape per world whose ``wp.Mesh`` points (and velocities) are overwritten
+  before every substep and refitted, so ``CollisionPipeline.collide`` makes particle-body contacts
+  against the posed body with its velocity (friction), at distance particle radius (material
+  thickness + drape's body margin) plus the soft-contact margin;
+- self-contact (``particle_enable_self_contact``) with margin = drape's ``self_radius`` and gap =
+  drape's ``self_query`` - ``self_radius``.
+Newton is not a dependency of drape: ``pip install newton`` to run this benchmark.
+"""
+
+from __future__ import annotations
+
+import argparse
+import pickle
+import time
+
+import numpy as np
+
+
+def _load_scene(path: str, name: str) -> dict:
+    """The garment and the body of every simulated frame (the pipeline's schedule) of one scene."""
+    from datagen.sim.scene import RunConfig, body_at, frame_schedule, scene_arrays
+
+    with open(path, "rb") as fh:  # our own pickle of our own Scene objects (bench_sim.py prepare-runs)
+        runs = pickle.load(fh)
+    if name not in runs["names"]:
+        raise SystemExit(f"scene {name!r} is not in {path}: it has {', '.join(runs['names'])}")
+    cfg = RunConfig()
+    a = scene_arrays(runs["scenes"][runs["names"].index(name)], cfg.lead_in)
+    schedule, recorded_from = frame_schedule(cfg, a.lead_frames, len(a.body_frames), a.fps)
+    schedule = [0.0, *schedule]  # the state before step k of the schedule is frame k here (frame 0: the drape)
+    frames = a.body_frames
+    return {"garment": a.garment_vertices, "faces": a.garment_faces, "material": a.material,
+            "frames": a.material_frames, "body_faces": a.body_faces, "body_vertices": frames.shape[1],
+            "body": lambda f: body_at(frames, schedule[f]).astype(np.float32), "frame_count": len(schedule),
+            "recorded_from": recorded_from}
+
+
+def _summary(frames: list[dict], recorded_from: int) -> dict:
+    pen = np.array([f["penetration_count"][0] for f in frames])
+    if PER_FRAME:
+        for k, f in enumerate(frames):
+            print(f"    frame {k + 1:3d}: pen {f['penetration_count'][0]:4d} depth {1000 * f['penetration_depth'][0]:6.2f} mm "
+                  f"self-x {f['self_intersections'][0]:4d} stretch max {f['stretch_max'][0]:7.3f} "
+                  f"mean {f['stretch_mean'][0]:6.3f}", flush=True)
+    return {
+        "frames": len(frames),
+        "recorded": len(frames[recorded_from:]),
+        "frames_with_penetration": int((pen[recorded_from:] > 0).sum()),
+        "frames_with_penetration_all": int((pen > 0).sum()),
+        "max_penetrating_vertices": int(pen.max()),
+        "max_depth_mm": 1000 * float(max(f["penetration_depth"][0] for f in frames)),
+        "max_self_intersections": int(max(f["self_intersections"][0] for f in frames)),
+        "max_stretch": float(max(f["stretch_max"][0] for f in frames)),
+        "nan": bool(any(f["nan"][0] for f in frames)),
+    }
+
+
+class _Measure:
+    """drape's metrics of scene 0 for garment positions from either solver."""
+
+    def __init__(self, d, device):
+        import warp as wp
+
+        from datagen.sim.metrics import Metrics
+        from datagen.sim.model import ClothModelBuilder
+        from datagen.sim.solver import SolverConfig, SolverVBD
+        from datagen.sim.state import BodyControl, ClothState
+
+        b = ClothModelBuilder()
+        b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=0, material_frames=d["frames"])
+        b.add_body(d["body"](0), d["body_faces"], scene=0)
+        self.model = b.finalize(str(device))
+        self.solver = SolverVBD(self.model, SolverConfig())
+        self.metrics = Metrics(self.model)
+        self.state = ClothState.from_model(self.model)
+        self.ctrl = BodyControl.from_numpy(self.model, d["body"](0))
+        self.wp = wp
+
+    def __call__(self, positions: np.ndarray, velocities: np.ndarray, body: np.ndarray) -> dict:
+        self.ctrl.set(body)
+        self.solver.reset_body(self.ctrl)
+        self.solver.body_sub.assign(self.ctrl.body_vertices)  # the metrics read the body's substep pose
+        for mesh in self.solver.body_meshes:
+            mesh.refit()
+        self.state.positions.assign(positions.astype(np.float32))
+        self.state.velocities.assign(velocities.astype(np.float32))
+        return self.metrics.measure(self.state, self.solver)
+
+
+DRAPE_OPTIONS: dict = {}
+
+
+def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure) -> dict:
+    import warp as wp
+
+    from datagen.sim.model import ClothModelBuilder
+    from datagen.sim.solver import SolverConfig, SolverVBD
+    from datagen.sim.state import BodyControl, ClothState
+
+    body = d["body"]
+    b = ClothModelBuilder()
+    for s in range(n):
+        b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s, material_frames=d["frames"])
+        b.add_body(body(0), d["body_faces"], scene=s)
+    m = b.finalize(str(device))
+    solver = SolverVBD(m, SolverConfig(**{**DRAPE_OPTIONS, "self_collision": self_col}))
+    a, c = ClothState.from_model(m), ClothState.from_model(m)
+    ctrl = BodyControl.from_numpy(m, np.tile(body(0), (n, 1)))
+    solver.reset_body(ctrl)
+    nv = len(d["garment"])
+    rec, elapsed = [], 0.0
+    for f in range(1, frames + 1):
+        ctrl.set(np.tile(body(f), (n, 1)))
+        wp.synchronize()
+        t = time.perf_counter()
+        solver.step(a, c, ctrl, 1 / 30)
+        wp.synchronize()
+        if f > 1:  # frame 1 compiles kernels
+            elapsed += time.perf_counter() - t
+        a, c = c, a
+        rec.append((a.positions.numpy()[:nv].copy(), a.velocities.numpy()[:nv].copy()))
+    ms = 1000 * elapsed / (frames - 1)
+    mets = [measure(p, v, body(f + 1)) for f, (p, v) in enumerate(rec)]
+    return {"ms_per_frame": ms, "garment_frames_per_s": 1000 * n / ms, **_summary(mets, d["recorded_from"])}
+
+
+def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure, substeps: int = 10,
+               iterations: int = 10) -> dict:
+    import newton
+    import warp as wp
+
+    from datagen.garment.materials import material
+    from datagen.sim.solver import SolverConfig
+
+    cfg = SolverConfig()
+    mat = material(str(d["material"]))
+    E = 0.5 * (mat.stretch_warp + mat.stretch_weft)
+    nu = mat.poisson
+    mu, lam = E / (2 * (1 + nu)), E * nu / (1 - nu * nu)
+    body, body_faces = d["body"], d["body_faces"].astype(np.int32)
+    body0 = body(0).astype(np.float32)
+    nb = len(body0)
+
+    scene = newton.ModelBuilder(up_axis=newton.Axis.Y)
+    world = newton.ModelBuilder(up_axis=newton.Axis.Y)
+    world.add_cloth_mesh(pos=wp.vec3(0.0, 0.0, 0.0), rot=wp.quat_identity(), scale=1.0, vel=wp.vec3(0.0, 0.0, 0.0),
+                         vertices=d["garment"].astype(np.float32).tolist(), indices=d["faces"].reshape(-1).tolist(),
+                         density=mat.density, tri_ke=mu, tri_ka=lam, tri_kd=mat.damping, edge_ke=mat.bending,
+                         edge_kd=mat.damping, particle_radius=mat.thickness + cfg.body_margin)
+    shape_cfg = newton.ModelBuilder.ShapeConfig(mu=mat.friction, has_shape_collision=False)
+    world.add_shape_mesh(body=-1, mesh=newton.Mesh(body0, body_faces.reshape(-1)), cfg=shape_cfg)
+    world.color()
+    for _ in range(n):
+        scene.add_world(world)
+    wp.synchronize()
+    dev = wp.get_device(device)
+    mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
+    model = scene.finalize(device=device)
+    model.soft_contact_ke = cfg.body_stiffness
+    model.soft_contact_kd = 0.0
+    model.soft_contact_mu = mat.friction
+    model.particle_mu = cfg.self_friction
+
+    # the body: one points array for every world's body mesh (slices), lerped per substep
+    with wp.ScopedDevice(device):
+        points = wp.array(np.tile(body0, (n, 1)), dtype=wp.vec3)
+        vels = wp.zeros(n * nb, dtype=wp.vec3)
+        start = wp.array(np.tile(body0, (n, 1)), dtype=wp.vec3)
+        end = wp.array(np.tile(body0, (n, 1)), dtype=wp.vec3)
+        tri = wp.array(body_faces.reshape(-1))
+        meshes = [wp.Mesh(points=points[s * nb:(s + 1) * nb], velocities=vels[s * nb:(s + 1) * nb], indices=tri)
+                  for s in range(n)]
+        kinds = model.shape_type.numpy()
+        body_shapes = np.flatnonzero(kinds == int(newton.GeoType.MESH))
+        assert len(body_shapes) == n
+        ptr = model.shape_source_ptr.numpy()
+        ptr[body_shapes] = [m.id for m in meshes]
+        model.shape_source_ptr.assign(ptr)
+        lo, hi = model.shape_collision_aabb_lower.numpy(), model.shape_collision_aabb_upper.numpy()
+        lo[body_shapes], hi[body_shapes] = -10.0, 10.0  # the body moves: no culling by its rest bounds
+        model.shape_collision_aabb_lower.assign(lo)
+        model.shape_collision_aabb_upper.assign(hi)
+        radius = model.shape_collision_radius.numpy()
+        radius[body_shapes] = 20.0
+        model.shape_collision_radius.assign(radius)
+
+        pipeline = newton.CollisionPipeline(model, soft_contact_gap=cfg.body_query)
+        contacts = pipeline.contacts()
+        solver = newton.solvers.SolverVBD(
+            model, iterations=iterations, particle_enable_self_contact=self_col,
+            particle_self_contact_margin=cfg.self_radius, particle_self_contact_gap=cfg.self_query - cfg.self_radius)
+        s0, s1 = model.state(), model.state()
+        control = model.control()
+    mem = (wp.get_mempool_used_mem_current(dev) - mem0) / n / 2**20 if dev.is_cuda else float("nan")
+
+    sub_dt = 1 / 30 / substeps
+    nv = len(d["garment"])
+    rec, elapsed = [], 0.0
+    for f in range(1, frames + 1):
+        end.assign(np.tile(body(f).astype(np.float32), (n, 1)))
+        wp.synchronize()
+        t = time.perf_counter()
+        for k in range(substeps):
+            wp.launch(_lerp_body, n * nb, inputs=[start, end, (k + 1) / substeps, 1.0 / (substeps * sub_dt)],
+                      outputs=[points, vels], device=device)
+            for m in meshes:
+                m.refit()
+            pipeline.collide(s0, contacts)
+            solver.step(s0, s1, control, contacts, sub_dt)
+            s0, s1 = s1, s0
+        wp.copy(start, end)
+        wp.synchronize()
+        if f > 1:
+            elapsed += time.perf_counter() - t
+        rec.append((s0.particle_q.numpy()[:nv].copy(), s0.particle_qd.numpy()[:nv].copy()))
+    ms = 1000 * elapsed / (frames - 1)
+    mets = [measure(p, v, body(f + 1)) for f, (p, v) in enumerate(rec)]
+    return {"ms_per_frame": ms, "garment_frames_per_s": 1000 * n / ms, "mb_per_scene": mem,
+            **_summary(mets, d["recorded_from"])}
+
+
+def _kernels():
+    import warp as wp
+
+    @wp.kernel
+    def lerp_body(start: wp.array(dtype=wp.vec3), end: wp.array(dtype=wp.vec3), a: float, inv_frame: float,
+                  points: wp.array(dtype=wp.vec3), vels: wp.array(dtype=wp.vec3)):
+        i = wp.tid()
+        points[i] = start[i] + a * (end[i] - start[i])
+        vels[i] = (end[i] - start[i]) * inv_frame
+
+    return lerp_body
+
+
+_lerp_body = None
+PER_FRAME = False
+
+
+def main() -> None:
+    global _lerp_body, PER_FRAME
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--inputs", default="runs.pkl", help="scenes from bench_sim.py prepare-runs")
+    ap.add_argument("--scene", default="tshirt/walk", help="which of them")
+    ap.add_argument("--device", default="cpu")
+    ap.add_argument("--batches", default="1")
+    ap.add_argument("--frames", type=int, default=0,
+                    help="simulated frames to run (0: the whole schedule); the first, which compiles, is not timed")
+    ap.add_argument("--self", default="on,off", help="self-collision settings to run: on, off or on,off")
+    ap.add_argument("--solvers", default="drape,newton")
+    ap.add_argument("--per-frame", action="store_true", help="print scene 0's metrics for every frame")
+    ap.add_argument("--drape-option", action="append", default=[], metavar="KEY=VALUE",
+                    help="a SolverConfig field for drape's solver (e.g. body_projection=false); repeatable")
+    args = ap.parse_args()
+    PER_FRAME = args.per_frame
+    from datagen.sim.solver import SolverConfig
+
+    defaults = SolverConfig()
+    for opt in args.drape_option:
+        key, _, value = opt.partition("=")
+        if not hasattr(defaults, key):
+            raise SystemExit(f"--drape-option {opt}: SolverConfig has no field {key!r}")
+        kind = type(getattr(defaults, key))
+        DRAPE_OPTIONS[key] = value.lower() == "true" if kind is bool else kind(float(value))
+
+    import warp as wp
+
+    wp.config.quiet = True
+    wp.init()
+    _lerp_body = _kernels()
+    d = _load_scene(args.inputs, args.scene)
+    frames = min(args.frames, d["frame_count"] - 1) if args.frames else d["frame_count"] - 1
+    dev = wp.get_device(args.device)
+    measure = _Measure(d, dev)
+    try:
+        import newton
+
+        newton_version = newton.__version__
+    except ImportError:
+        newton_version = "not installed"
+    print(f"device {dev} ({dev.name}); warp {wp.__version__}; newton {newton_version}; scene {args.scene}: "
+          f"{len(d['garment'])} vertices, {len(d['faces'])} faces, {d['material']}; body {d['body_vertices']} vertices; "
+          f"{frames} frames at 30 fps ({frames - 1} timed; recorded from frame {d['recorded_from']}), "
+          "10 substeps x 10 iterations", flush=True)
+    head = (f"{'solver':>7} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
+            f"{'max pen v':>9} {'depth mm':>8} {'self-x':>6} {'stretch':>8} {'nan':>4}")
+    print(head, flush=True)
+    for self_col in [s == "on" for s in args.self.split(",")]:
+        for n in [int(b) for b in args.batches.split(",")]:
+            for name in args.solvers.split(","):
+                fn = run_drape if name == "drape" else run_newton
+                r = fn(d, n, self_col, frames, dev, measure)
+                print(f"{name:>7} {n:5d} {'on' if self_col else 'off':>5} {r['ms_per_frame']:9.1f} "
+                      f"{r['garment_frames_per_s']:10.1f} {r['frames_with_penetration']:>4d}/{r['recorded']:<5d} "
+                      f"{r['max_penetrating_vertices']:9d} {r['max_depth_mm']:8.2f} {r['max_self_intersections']:6d} "
+                      f"{r['max_stretch']:8.3f} {'yes' if r['nan'] else 'no':>4}", flush=True)
+
+
+if __name__ == "__main__":
+    main()
