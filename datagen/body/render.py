@@ -36,6 +36,9 @@ class MeshLayer:
         two_sided: draw faces seen from behind too (an open garment's inside), times ``inside``;
             else they are culled.
         inside: brightness factor of faces seen from behind.
+        depth_bias: added to the sort depth of this layer's faces that face the camera [m]: a
+            garment lying on the body is drawn over it even where its (larger, tilted) triangles'
+            centres are farther from the camera than the body's (painter's order by centres).
     """
 
     vertices: np.ndarray
@@ -43,6 +46,7 @@ class MeshLayer:
     colors: np.ndarray | tuple[float, float, float]
     two_sided: bool = False
     inside: float = 0.45
+    depth_bias: float = 0.0
 
 
 def view_rotation(azimuth: float) -> np.ndarray:
@@ -75,7 +79,7 @@ def shade_polygons(layers: list[MeshLayer], azimuth: float, *, ambient: float = 
         if layer.two_sided:
             c = np.where(front[show][:, None], c, c * layer.inside)
         polys.append(tri[show][:, :, :2])
-        depth.append(tri[show, :, 2].mean(1))
+        depth.append(tri[show, :, 2].mean(1) + layer.depth_bias * front[show])
         rgb.append(np.clip(c, 0, 1))
     polys, depth, rgb = np.concatenate(polys), np.concatenate(depth), np.concatenate(rgb)
     order = np.argsort(depth, kind="stable")

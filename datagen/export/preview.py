@@ -44,6 +44,8 @@ IMAGE_SUFFIXES = (".png",)
 CLIP_SUFFIXES = (".gif", ".mp4")
 BODY_COLOR = (0.78, 0.74, 0.70)
 DPI = 100
+GARMENT_DEPTH_BIAS = 0.02
+"""Sort depth added to the garment's camera-facing faces [m], so it is drawn over the body it lies on."""
 DEFAULT_SIZE = (512, 640)
 
 _QUANTITIES = {  # colour-by -> (colour bar label, colormap)
@@ -236,7 +238,8 @@ class _FrameDrawer:
         """Frame ``k`` as an RGB image [H, W, 3] uint8."""
         a = self.anim
         layers = [MeshLayer(a.body_vertices[k], a.body_faces, BODY_COLOR),
-                  MeshLayer(self.garment[k], a.garment_faces, self.garment_colors(k), two_sided=True)]
+                  MeshLayer(self.garment[k], a.garment_faces, self.garment_colors(k), two_sided=True,
+                            depth_bias=GARMENT_DEPTH_BIAS)]
         polys, rgb = shade_polygons(layers, self.azimuth, ambient=0.3, absolute=True)
         self.collection.set_verts(polys)
         self.collection.set_facecolor(rgb)
