@@ -211,13 +211,19 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
         return
     vb = disp / h
     r = radius[i]
+    found = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     if wp.dot(x[i] - p, n) < 0.25 * r:
-        x[i] = p + n * (0.5 * r)
-    else:
-        # in front of its closest face yet inside: where body parts overlap (an arm sunk into the
-        # torso, thighs into each other) the closest face is not the way out. Take the nearest
-        # outside point among 26 directions at distances r, 2r, ..., 32r.
-        found = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+        # behind its closest face: out along the face normal, if that is outside (in a crease
+        # between two faces, e.g. the crotch or an armpit, it can land under the other face)
+        cand = p + n * (0.5 * r)
+        qn = wp.mesh_query_point_sign_winding_number(mesh, cand, query, 2.0, 0.5)
+        if (not qn.result) or qn.sign > 0.0:
+            x[i] = cand
+            found = 1
+    if found == 0:
+        # in front of its closest face yet inside, or the normal led nowhere: where body parts
+        # overlap (an arm sunk into the torso, thighs into each other) the closest face is not the
+        # way out. Take the nearest outside point among 26 directions at distances r, 2r, ..., 32r.
         t = r
         for _step in range(6):
             if found == 0:
