@@ -26,7 +26,7 @@ How Newton's side is set up (newton 1.8):
   thickness + drape's body margin) plus the soft-contact margin;
 - self-contact (``particle_enable_self_contact``) with margin = drape's ``self_radius`` and gap =
   drape's ``self_query`` - ``self_radius``.
-Newton is not a dependency of drape: ``pip install newton`` to run this benchmark.
+Newton is not a dependency of drape: ``pip install -e .[newton]`` (or ``pip install newton``) to run this benchmark.
 """
 
 from __future__ import annotations
