@@ -100,10 +100,7 @@ class _Measure:
 
     def __call__(self, positions: np.ndarray, velocities: np.ndarray, body: np.ndarray) -> dict:
         self.ctrl.set(body)
-        self.solver.reset_body(self.ctrl)
-        self.solver.body_sub.assign(self.ctrl.body_vertices)  # the metrics read the body's substep pose
-        for mesh in self.solver.body_meshes:
-            mesh.refit()
+        self.solver.place_body(self.ctrl)
         self.state.positions.assign(positions.astype(np.float32))
         self.state.velocities.assign(velocities.astype(np.float32))
         return self.metrics.measure(self.state, self.solver)

@@ -153,6 +153,14 @@ class SolverVBD:
         """Take ``control`` as the body's pose at the start of the next step (no motion in between)."""
         self.body_start.assign(control.body_vertices)
 
+    def place_body(self, control) -> None:
+        """Put the body at ``control``'s pose now: the start of the next step and the collider that
+        contacts and metrics read (its meshes refitted), as if a step had just ended there."""
+        self.reset_body(control)
+        self.body_sub.assign(control.body_vertices)
+        for mesh in self.body_meshes:
+            mesh.refit()
+
     def step(self, state_in, state_out, control, dt: float) -> None:
         """Advance by ``dt`` [s]; ``state_in`` is read, ``state_out`` written (they may be the same).
 
