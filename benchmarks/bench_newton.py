@@ -4,7 +4,8 @@ The scene is one of ``bench_sim.py prepare-runs``' (default: the T-shirt on the 
 walking, 30 fps), run as ``drape``'s pipeline runs it: settle at rest, lead-in from the rest pose,
 settle in the first pose, the 1 s ramp into the motion, then the motion (``frame_schedule`` in
 datagen/sim/scene.py). Both solvers get the same garment mesh, the same posed body mesh per frame
-(interpolated linearly within the frame, substep by substep), 10 substeps x 10 iterations, the same
+(interpolated linearly within the frame, substep by substep), the same substeps and iterations (drape's
+solver settings, 10 x 10 by default), the same
 contact distances and stiffnesses, and the same material; batches of N copies of the scene run in
 one model (drape: scenes; Newton: worlds).
 
@@ -290,6 +291,9 @@ def main() -> None:
     frames = min(args.frames, d["frame_count"] - 1) if args.frames else d["frame_count"] - 1
     dev = wp.get_device(args.device)
     measure = _Measure(d, dev)
+    from datagen.sim.solver import SolverConfig
+
+    cfg = SolverConfig(**DRAPE_OPTIONS)
     try:
         import newton
 
@@ -299,15 +303,18 @@ def main() -> None:
     print(f"device {dev} ({dev.name}); warp {wp.__version__}; newton {newton_version}; scene {args.scene}: "
           f"{len(d['garment'])} vertices, {len(d['faces'])} faces, {d['material']}; body {d['body_vertices']} vertices; "
           f"{frames} frames at 30 fps ({frames - 1} timed; recorded from frame {d['recorded_from']}), "
-          "10 substeps x 10 iterations", flush=True)
+          f"{cfg.substeps} substeps x {cfg.iterations} iterations (both solvers)", flush=True)
     head = (f"{'solver':>7} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
             f"{'max pen v':>9} {'depth mm':>8} {'self-x':>6} {'stretch':>8} {'nan':>4}")
     print(head, flush=True)
     for self_col in [s == "on" for s in args.self.split(",")]:
         for n in [int(b) for b in args.batches.split(",")]:
             for name in args.solvers.split(","):
-                fn = run_drape if name == "drape" else run_newton
-                r = fn(d, n, self_col, frames, dev, measure)
+                if name == "drape":
+                    r = run_drape(d, n, self_col, frames, dev, measure)
+                else:
+                    r = run_newton(d, n, self_col, frames, dev, measure, substeps=cfg.substeps,
+                                   iterations=cfg.iterations)
                 print(f"{name:>7} {n:5d} {'on' if self_col else 'off':>5} {r['ms_per_frame']:9.1f} "
                       f"{r['garment_frames_per_s']:10.1f} {r['frames_with_penetration']:>4d}/{r['recorded']:<5d} "
                       f"{r['max_penetrating_vertices']:9d} {r['max_depth_mm']:8.2f} {r['max_self_intersections']:6d} "

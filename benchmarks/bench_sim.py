@@ -50,8 +50,8 @@ def run(args) -> None:
     wp.init()
     dev = wp.get_device(args.device)
     print(f"device {dev} ({dev.name}); tshirt {len(d['garment'])} vertices, {len(d['faces'])} faces; body "
-          f"{body.shape[1]} vertices; {min(args.frames, len(body) - 1)} timed frames at 30 fps, 10 substeps x 10 "
-          "iterations")
+          f"{body.shape[1]} vertices; {min(args.frames, len(body) - 1)} timed frames at 30 fps, {SolverConfig().substeps} substeps x "
+          f"{SolverConfig().iterations} iterations")
     print(f"{'batch':>5} {'self':>5} {'ms/frame':>9} {'garment-frames/s':>17} {'MB/scene':>9} {'pen':>5} {'self-x':>6} "
           f"{'stretch':>8}")
     for self_col in (True, False):

@@ -17,7 +17,7 @@ def register(sub, formatter) -> None:
                        "  drape generate my.toml --out my.zarr --device cuda\n"
                        "  drape generate --preset paper-gnn --out gnn.zarr --executor ray --device cuda")
     p.add_argument("config", nargs="?", default=None, help="dataset config (.toml/.yaml); default: --preset tiny")
-    p.add_argument("--preset", default=None, help="tiny (default), paper-gnn, paper-motion")
+    p.add_argument("--preset", default=None, help="tiny (default), small, paper-gnn, paper-motion")
     p.add_argument("--out", required=True, help="the store directory")
     p.add_argument("--executor", default="local", choices=("local", "ray"))
     p.add_argument("--workers", type=int, default=2, help="Ray workers on a local Ray instance")

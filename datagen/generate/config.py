@@ -66,7 +66,7 @@ class SimulationConfig:
     """
 
     substeps: int = field(default=10, metadata={"min": 1, "max": 200})
-    iterations: int = field(default=10, metadata={"min": 1, "max": 200})
+    iterations: int = field(default=20, metadata={"min": 1, "max": 200})
     self_collision: bool = True
     settle_rest: int = field(default=15, metadata={"min": 1, "max": 1000})
     lead_in: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0})
@@ -183,6 +183,16 @@ PRESETS: dict[str, dict] = {
         "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
         "val": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},
         "test": {"garments": ["dress:2"], "bodies": ["fat"], "motions": ["squat:2"]},
+    },
+    # a GPU in a few minutes: six garment types on two bodies doing four motions for training,
+    # 56 scenes of 60 frames in one batch
+    "small": {
+        "seed": 0, "frames": 60, "segment_length": 60,
+        "simulation": {"batch_size": 64},
+        "train": {"garments": ["tshirt:0", "tank_top:0", "dress:0", "skirt:0", "pants:0", "shorts:0"],
+                  "bodies": ["regular", "seed:1"], "motions": ["walk:0", "dance_sway:0", "squat:0", "wave:0"]},
+        "val": {"garments": ["tshirt:7", "skirt:7"], "bodies": ["seed:7"], "motions": ["walk:7", "box:7"]},
+        "test": {"garments": ["dress:9", "pants:9"], "bodies": ["fat"], "motions": ["walk:9", "dance_disco:9"]},
     },
     # paper 000 §5.1: 17 garments, 6 bodies, ~2,900 poses for training; 7 garments, 3 bodies, ~400 poses
     # for testing; 3 garments, 2 bodies, ~100 poses for validation (meant for a GPU)

@@ -114,12 +114,12 @@ class Plan:
         """Garment instance g (built once per process)."""
         cache = self.__dict__.setdefault("_garments", {})
         if g not in cache:
-            from datagen.garment.types import make_garment
+            from datagen.garment.cache import cached_garment
 
             kind, seed = parse_garment(self.instances[g][0])
             b = self.bodies.index(self.instances[g][1])
-            cache[g] = make_garment(kind, self.body_model, self.betas[b], seed=seed,
-                                    target_edge_length=self.config.garment_edge_length)
+            cache[g] = cached_garment(kind, self.body_model, self.betas[b], seed=seed,
+                                      target_edge_length=self.config.garment_edge_length)
         return cache[g]
 
     def correspondence(self, g: int) -> dict:

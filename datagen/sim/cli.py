@@ -24,7 +24,7 @@ def register(sub, formatter) -> None:
     p.add_argument("--frames", type=int, default=120, help="recorded frames")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate")
     p.add_argument("--substeps", type=int, default=10)
-    p.add_argument("--iterations", type=int, default=10)
+    p.add_argument("--iterations", type=int, default=20)
     p.add_argument("--no-self-collision", action="store_true", help="turn cloth self-collision off")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N)")
     p.add_argument("--out", required=True, help="output .npz (positions [T, V, 3], faces, metric_* per frame)")

@@ -189,7 +189,7 @@ def body_surface_point(f: int, u: float, v: float, body_faces: wp.array2d(dtype=
 def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
                         scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
                         body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
-                        radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32), h: float,
+                        radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32), h: float, reach: float,
                         x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), projected: wp.array(dtype=wp.int32)):
     """Hard non-penetration at the end of a substep: a vertex inside the body (winding number, the
     same test as the penetration metric) moves to its closest body point plus half its contact
@@ -223,10 +223,12 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
     if found == 0:
         # in front of its closest face yet inside, or the normal led nowhere: where body parts
         # overlap (an arm sunk into the torso, thighs into each other) the closest face is not the
-        # way out. Take the nearest outside point among 26 directions at distances r, 2r, ..., 32r.
+        # way out. Take the nearest outside point among 26 directions at distances r, 2r, 4r, ...
+        # up to ``reach`` (a vertex deeper than that stays inside: a longer jump would tear its
+        # triangles, which the membrane cannot follow within the substep).
         t = r
         for _step in range(6):
-            if found == 0:
+            if found == 0 and t <= reach:
                 for k in range(26):
                     if found == 0:
                         dz = float(k % 3) - 1.0

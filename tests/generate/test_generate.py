@@ -148,6 +148,6 @@ def test_config_errors_say_what_is_wrong():
         resolve_config(preset="huge")
     with pytest.raises(ConfigError, match="substep"):
         load_config(DatasetConfig, {**MICRO, "simulation": {"substep": 3}})
-    assert set(PRESETS) == {"tiny", "paper-gnn", "paper-motion"}
+    assert set(PRESETS) == {"tiny", "small", "paper-gnn", "paper-motion"}
     for name in PRESETS:
         resolve_config(preset=name)
