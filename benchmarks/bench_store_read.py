@@ -114,7 +114,8 @@ def synthetic_sample(i: int, V: int, T: int, B: int, G: int, lead: int = 30) -> 
                "metric_penetration_count": rng.integers(0, 5, T_sim).astype(np.int32),
                "metric_penetration_depth": (rng.random(T_sim) * 1e-3).astype(f32),
                "metric_self_intersections": rng.integers(0, 3, T_sim).astype(np.int32),
-               "metric_kinetic_energy": rng.random(T_sim).astype(f32), "metric_nan": np.zeros(T_sim, np.uint8)}
+               "metric_kinetic_energy": rng.random(T_sim).astype(f32), "metric_nan": np.zeros(T_sim, np.uint8),
+               "metric_slip": rng.random(T_sim).astype(f32) * 1e-2}
     g = i % G
     scalars = {"garment": g, "body": g, "motion": g, "split": 0 if g < max(1, G - 2) else (1 if g == G - 2 else 2),
                "failure": 0, "failure_frame": -1, "recorded_from": lead, "seconds": 1.0}

@@ -1,4 +1,4 @@
-"""Schema of drape's dataset store (version 1): every group and array of the packed zarr v3 store
+"""Schema of drape's dataset store (version 2): every group and array of the packed zarr v3 store
 with its symbolic shape, dtype, unit and meaning, the table whose rows its first axis runs over,
 and every required root attribute. ``datagen.store`` writes, reads and validates against this
 module and nothing else; ``docs/store.md`` explains it in prose.
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-DATASET_SCHEMA_VERSION = 1
+DATASET_SCHEMA_VERSION = 2
 
 STORE_FORMAT = "drape-dataset"
 """Value of the root attribute ``format`` that marks a zarr group as a drape dataset store."""
@@ -34,7 +34,7 @@ JOINT_COUNT = 24
 SPLIT_NAMES: tuple[str, ...] = ("train", "val", "test")
 """Split codes: ``samples/split`` = index into this tuple."""
 
-FAILURE_NAMES: tuple[str, ...] = ("ok", "nan", "penetration", "self-intersection", "stretch")
+FAILURE_NAMES: tuple[str, ...] = ("ok", "nan", "penetration", "self-intersection", "stretch", "slip")
 """Default failure codes (``samples/failure`` = index; 0 = ok): the reasons ``datagen.sim.metrics``
 gives, by the word before their colon. A store may be created with a longer list."""
 
@@ -238,6 +238,8 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
     _metric("metric_self_intersections", "int32", "count", "cloth edges crossing a cloth triangle"),
     _metric("metric_kinetic_energy", "float32", "J", "kinetic energy of the garment"),
     _metric("metric_nan", "uint8", "bool", "1 where a position or velocity was not finite"),
+    _metric("metric_slip", "float32", "m", "mean distance the garment's top band moved away from the body points "
+            "that carry it"),
     # --- per sample: scalars, packed [n_samples]
     _scalar("garment", "int32", "index", "garment instance (row of the garments/ tables)", index_of="G"),
     _scalar("body", "int32", "index", "body (row of bodies/betas)", index_of="n_bodies"),

@@ -24,9 +24,12 @@ log = logging.getLogger(__name__)
 
 
 def garment_cache_key(kind: str, seed: int, body_model, betas, target_edge_length: float | None) -> str:
-    """Hash of what the build reads: type, seed, edge length, builder version, shaped body."""
-    from datagen.garment.types import BUILDER_VERSION
+    """Hash of what the build reads: type, seed, edge length (the type's default resolved), builder
+version, shaped body."""
+    from datagen.garment.types import BUILDER_VERSION, GARMENT_TYPES, default_edge_length
 
+    if target_edge_length is None and kind in GARMENT_TYPES:  # resolved: a changed default is a new key
+        target_edge_length = default_edge_length(kind)
     betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
     h = hashlib.sha256(json.dumps([kind, int(seed), target_edge_length, BUILDER_VERSION]).encode())
     h.update(np.ascontiguousarray(np.asarray(body_model.shaped(betas))[0], dtype=np.float64).tobytes())

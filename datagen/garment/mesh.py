@@ -129,6 +129,17 @@ class GarmentMesh:
         weft /= np.linalg.norm(weft, axis=1, keepdims=True) + 1e-30
         return np.stack([weft, np.cross(n, weft)], axis=1)
 
+    def weft_rest_scale(self) -> np.ndarray:
+        """Rest length along the weft relative to the built mesh, per face [F]: below 1 on the
+        elastic waistband of a garment that hangs from the waist (``metadata["waistband"]``), 1
+        elsewhere; the simulator shortens those faces' rest shape around the body."""
+        scale = np.ones(len(self.faces))
+        band = self.metadata.get("waistband")
+        if band:
+            centroid_y = self.vertices[self.faces][:, :, 1].mean(1)
+            scale[centroid_y >= band["top"] - band["width"]] = band["weft_scale"]
+        return scale
+
     def save(self, path: str | Path) -> Path:
         """Write ``.obj``/``.ply`` (geometry, via trimesh) or ``.npz`` (everything, no pickles)."""
         path = Path(path)

@@ -31,7 +31,7 @@ MIN_CLEARANCE = 0.008
 MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
-BUILDER_VERSION = 2
+BUILDER_VERSION = 3
 
 
 _TOP = {
@@ -113,6 +113,11 @@ default edge length (``edge``, m; 0.02 where absent), chosen so every type has 2
 vertices by default."""
 
 
+def default_edge_length(kind: str) -> float:
+    """The remeshing target of ``kind`` when none is given [m]."""
+    return float(GARMENT_TYPES[kind].get("edge", 0.02))
+
+
 def garment_params(kind: str, seed: int, overrides: dict | None = None) -> dict[str, float]:
     """Style parameters of ``kind`` drawn by ``seed``, with ``overrides`` applied (range-checked)."""
     if kind not in GARMENT_TYPES:
@@ -167,7 +172,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     spec = GARMENT_TYPES[kind]
     mat = material(material_name or spec["material"])
     if target_edge_length is None:
-        target_edge_length = spec.get("edge", 0.02)
+        target_edge_length = default_edge_length(kind)
     if not (np.isfinite(target_edge_length) and target_edge_length > 0):
         raise InputError(f"target edge length must be a positive number of metres, got {target_edge_length!r}")
     betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
@@ -182,7 +187,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
                          f"(~{est_vertices * 2 * 3 * 8 * 40 / 1e9:.1f} GB to simulate); the smallest allowed is "
                          f"{smallest:.4f} m ({MAX_VERTICES:,} vertices)")
     h = grid_spacing or min(0.01, max(target_edge_length / 1.3, 0.004))
-    field, keep, lo, hi, regions = _design(kind, p, body, h)
+    field, keep, lo, hi, regions, waist_top = _design(kind, p, body, h)
     rough_v, rough_f = levelset.extract_surface(field, lo, hi, h)
     # remesh the closed surface first, so the cut meets edges of the target length and leaves a
     # boundary spaced like the rest; then cut, and remesh again to even out the cut's neighbourhood
@@ -194,12 +199,56 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     v, f = levelset.split_pinched_vertices(v, f)
     v, f = levelset.close_small_holes(v, f, 8)
     region_names, vertex_region, chart = regions(v)
+    waistband = None if waist_top is None else _waistband(v, body, waist_top)
     uv, face_uv, wrap_seam = _panel_uvs(v, f, vertex_region, region_names, chart)
     seconds = time.perf_counter() - t0
     meta = {"type": kind, "params": p, "seed": int(seed), "betas": betas.tolist(), "target_edge_length": target_edge_length,
             "expected_boundary_loops": spec["loops"], "builder_version": BUILDER_VERSION, "build_seconds": seconds}
+    if waistband is not None:
+        meta["waistband"] = waistband
     return GarmentMesh.create(v, f, uv=uv, vertex_region=vertex_region, region_names=region_names, material=mat,
                               metadata=meta, face_uv=face_uv, extra_seam=wrap_seam)
+
+
+WAISTBAND_WIDTH = 0.04
+"""Height of the elastic band below the waist opening of skirts, pants and shorts (m)."""
+
+WAISTBAND_GRIP = 0.95
+"""The band's rest length around the body as a share of the body's girth under it: fitted, the band
+is stretched by about 1/0.95 - 1 = 5 %, and the friction of that tension holds the garment up."""
+
+
+def _hull_perimeter(points_xz: np.ndarray) -> float:
+    from scipy.spatial import ConvexHull
+
+    hull = points_xz[ConvexHull(points_xz).vertices]
+    return float(np.linalg.norm(hull - np.roll(hull, 1, axis=0), axis=1).sum())
+
+
+def _waistband(v: np.ndarray, body: _Body, top: float) -> dict:
+    """The elastic band of a garment that hangs from the waist: its faces are those within
+    :data:`WAISTBAND_WIDTH` below ``top``, their rest length along the weft (around the body) is
+    ``weft_scale`` times the built one (a shrinkage, as cloth tools call it).
+
+    A band built with the garment's clearance is longer than the body's girth, and nothing but
+    friction holds such a skirt or pair of pants up: they slid down off the body (denim pants 30 cm
+    in half a second of settling). The scale is the body's girth (the convex hull of its cross
+    section, which a taut band spans) times :data:`WAISTBAND_GRIP` over the garment's girth, both at
+    the band (the hull of its vertices seen from above).
+    """
+    def band(p):
+        return p[(p[:, 1] > top - WAISTBAND_WIDTH) & (p[:, 1] < top + 0.002)]
+
+    bv = band(body.verts)
+    bv = bv[np.abs(bv[:, 0]) < body.j("left_shoulder")[0] + 0.05]  # the trunk, not a hand
+    gv = band(v)
+    if len(bv) < 8 or len(gv) < 8:
+        raise InputError(f"the waistband below {top:.3f} m meets too few body ({len(bv)}) or garment ({len(gv)}) "
+                         "vertices to measure its girth: the garment's waist parameter puts it off the body")
+    girth_body, girth_garment = _hull_perimeter(bv[:, [0, 2]]), _hull_perimeter(gv[:, [0, 2]])
+    return {"top": float(top), "width": WAISTBAND_WIDTH, "weft_scale": float(min(1.0, WAISTBAND_GRIP * girth_body /
+                                                                                  girth_garment)),
+            "girth_body": girth_body, "girth_garment": girth_garment}
 
 
 def _panel_uvs(v: np.ndarray, f: np.ndarray, vertex_region: np.ndarray, names, chart):
@@ -250,7 +299,8 @@ def _panel_uvs(v: np.ndarray, f: np.ndarray, vertex_region: np.ndarray, names, c
 
 
 def _design(kind: str, p: dict, body: _Body, spacing: float):
-    """The implicit field, the keep (cut) field, the grid box and the region labeller of a garment."""
+    """The implicit field, the keep (cut) field, the grid box, the region labeller of a garment
+    and the height of its waist opening (None for a top, which hangs from the shoulders)."""
     sh = body.j("left_shoulder")
     neck = body.j("neck")
     chest_y = body.j("spine3")[1]
@@ -265,8 +315,11 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
     nw, nd, _ = body.half_extent(neck[1], band=0.01)
     if top:
         grow = p["ease_chest"] + 0.015 + p["neck_width"]
-        # the neck opening stops 5 cm short of the shoulder joint, so shoulders (and straps) stay
-        neck_rx, neck_rz = min(nw + grow, sh[0] - 0.05), nd + grow
+        # the neck opening stops short of the shoulder joint, so shoulders (and straps) stay; a
+        # sleeveless top's strap runs from 7 cm to 2 cm inside the joint, on the trapezius: with
+        # the strap out on the shoulder tip, a silk dress slid off the lowered shoulders (its top
+        # fell 30 cm in the first 1.5 s of a walk) and its hem dragged under the feet
+        neck_rx, neck_rz = min(nw + grow, sh[0] - (0.05 if sleeve else 0.07)), nd + grow
 
     # --- clearance (ease) over the body
     def ease(pts):
@@ -340,9 +393,9 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
             cuts.append((neck[1] + 0.1) - y)
             if sleeve:
                 cuts.append((sh[0] + p["sleeve_length"]) - np.abs(x))
-            else:  # armholes: the arm beyond the shoulder and the side wall down to the armhole line
+            else:  # armholes: the arm, the shoulder tip and the side wall down to the armhole line
                 armpit = sh[1] - 0.07 - p["armhole_drop"]
-                cuts.append(np.maximum((sh[0] + 0.005) - np.abs(x), armpit - y))
+                cuts.append(np.maximum((sh[0] - 0.02) - np.abs(x), armpit - y))
             if "opening" in p:
                 # at least 2 grid steps either side of the mid-plane: a narrower slot is not
                 # resolved by marching cubes everywhere and a bridge of cloth closes the front
@@ -401,4 +454,4 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
             reg = np.where(x >= 0, 0, 2) + np.where(z > hzc, 0, 1)
         return tuple(names), reg.astype(np.int32), chart
 
-    return field, keep, lo, hi, regions
+    return field, keep, lo, hi, regions, (None if top else float(waist_y - p["waist"]))

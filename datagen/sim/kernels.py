@@ -33,7 +33,6 @@ from __future__ import annotations
 import warp as wp
 
 BIG = 1.0e9
-BODY_FRICTION_IN_SOLVE = wp.constant(0.0)
 
 
 @wp.func
@@ -98,27 +97,28 @@ def contact_force_hessian(dx_rel: wp.vec3, n: wp.vec3, depth: float, k: float, m
     if lam_friction >= 0.0:
         lam_f = lam_friction
     if mu > 0.0 and lam_f > 0.0:
-        t = dx_rel - n * wp.dot(n, dx_rel)
-        ut = wp.length(t)
-        scale = mu * lam_f * wp.abs(weight) / wp.max(ut, eps_u)
-        f = f - t * scale
-        h = h + (wp.identity(n=3, dtype=float) - wp.outer(n, n)) * scale
+        ff, hf = friction_force_hessian(dx_rel, n, mu * lam_f * wp.abs(weight), eps_u)
+        f = f + ff
+        h = h + hf
     return f, h
+
+
+@wp.func
+def friction_force_hessian(dx_rel: wp.vec3, n: wp.vec3, limit: float, eps_u: float):
+    """Coulomb friction of at most ``limit`` [N] against the tangential part of the relative
+    displacement ``dx_rel`` over the substep, smoothed (a stiff spring) below ``eps_u``."""
+    t = dx_rel - n * wp.dot(n, dx_rel)
+    scale = limit / wp.max(wp.length(t), eps_u)
+    return -t * scale, (wp.identity(n=3, dtype=float) - wp.outer(n, n)) * scale
 
 
 @wp.kernel
 def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
                  area: wp.array(dtype=float), active: wp.array(dtype=wp.int32), gravity: wp.vec3, air_drag: float,
                  h: float, x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtype=wp.vec3),
-                 pinned_target: wp.array(dtype=wp.vec3), body_has: wp.array(dtype=wp.int32),
-                 body_normal: wp.array(dtype=wp.vec3), body_disp: wp.array(dtype=wp.vec3),
-                 body_lambda: wp.array(dtype=float), friction: wp.array(dtype=float)):
-    """Save x₀, form the inertial target y; pinned vertices move to their target.
-
-    A vertex that the body pushed at the end of the last substep (normal force λ) loses up to
-    μ λ h / m of its predicted tangential velocity relative to the body (Coulomb friction on the
-    velocity, static when the whole of it is taken), so the whole cloth, not vertex by vertex,
-    feels the friction; the solve adds friction against the forces that arise within it."""
+                 pinned_target: wp.array(dtype=wp.vec3)):
+    """Save x₀, form the inertial target y; pinned vertices move to their target (friction with the
+    body comes after the solve: ``body_friction``)."""
     i = wp.tid()
     x_prev[i] = x[i]
     if active[i] == 0:
@@ -127,21 +127,7 @@ def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: w
     a = gravity
     if mass[i] > 0.0:
         a = a - v[i] * (air_drag * area[i] / mass[i])
-    vi = v[i] + a * h  # the predicted velocity: y = x + h (v + h a)
-    if mass[i] > 0.0 and body_has[i] == 1 and body_lambda[i] > 0.0:
-        n = body_normal[i]
-        vb = body_disp[i] / h
-        rel = vi - vb
-        vn = n * wp.dot(rel, n)
-        vt = rel - vn
-        lt = wp.length(vt)
-        dv = friction[i] * body_lambda[i] * h / mass[i]
-        if lt <= dv:
-            vt = wp.vec3(0.0)
-        else:
-            vt = vt * (1.0 - dv / lt)
-        vi = vb + vn + vt
-    inertia_target[i] = x[i] + vi * h
+    inertia_target[i] = x[i] + (v[i] + a * h) * h
 
 
 @wp.kernel
@@ -157,6 +143,35 @@ def initial_guess(x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtyp
     if L > bound[i]:
         d = d * (bound[i] / L)
     x[i] = x_prev[i] + d
+
+
+@wp.kernel
+def body_friction(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
+                  active: wp.array(dtype=wp.int32), has: wp.array(dtype=wp.int32), normal: wp.array(dtype=wp.vec3),
+                  body_disp: wp.array(dtype=wp.vec3), lam: wp.array(dtype=float), friction: wp.array(dtype=float),
+                  h: float):
+    """Coulomb friction on the substep's result: a vertex the body pushes with normal force λ
+    loses up to μ λ h / m of its tangential velocity relative to the body over the substep (its
+    end position moves back along the slide; all of it when the slide is smaller: static).
+
+    This acts on whatever moved the vertex in the solve, the forces the cloth passes on included:
+    the weight of a pair of pants hangs on its waistband through the membrane, and friction that
+    only acted on each vertex's own predicted velocity (``forward_step``) let them slide off the
+    hips. A friction force inside the vertex solve cannot do it: each vertex's Newton step
+    is held by its neighbours' membrane stiffness, a thousand times the friction's, so the cloth
+    slid as if frictionless (a patch on a 20° plane with μ = 0.5)."""
+    i = wp.tid()
+    if active[i] == 0 or mass[i] <= 0.0 or has[i] == 0 or lam[i] <= 0.0:
+        return
+    n = normal[i]
+    rel = (x[i] - x_prev[i]) - body_disp[i]
+    t = rel - n * wp.dot(rel, n)
+    lt = wp.length(t)
+    allowed = friction[i] * lam[i] * h * h / mass[i]  # the tangential move friction can take back
+    if lt <= allowed:
+        x[i] = x[i] - t
+    else:
+        x[i] = x[i] - t * (allowed / lt)
 
 
 @wp.kernel
@@ -683,9 +698,8 @@ def solve_colour(
         dist = wp.dot(xi - body_point[i], n)
         r = body_radius[i]
         if dist < r:
-            rel = (xi - x_prev[i]) - body_disp[i]
-            fc, hc = contact_force_hessian(rel, n, r - dist, body_k, friction[i] * BODY_FRICTION_IN_SOLVE, eps_u, 1.0,
-                                           body_lambda[i])
+            # normal only: friction with the body acts after the solve (body_friction)
+            fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0, -1.0)
             force += fc
             hess += hc
     if wp.abs(wp.determinant(hess)) < 1.0e-20:

@@ -4,7 +4,12 @@ Measured per scene and frame: maximum and mean stretch (largest principal stretc
 triangle minus one), garment vertices inside the body (count and deepest depth, by warp's
 winding-number query on the posed body), self-intersections (cloth edges crossing a cloth
 triangle that shares no vertex with them; every pair of intersecting triangles has at least one),
-kinetic energy, and whether any value is not finite.
+kinetic energy, whether any value is not finite, and slip: how far the top of the garment (the
+band within :data:`SLIP_BAND` of its highest rest point: shoulders and neckline of a top, the
+waistband of a skirt or pants) has moved away from the body points that carry it (each vertex's
+closest body vertex in the rest pose, posed), as a mean over the band's vertices. A garment that
+slides off the body (a dress off the shoulders, pants down the legs) keeps every other metric clean;
+slip is what shows it.
 """
 
 from __future__ import annotations
@@ -15,7 +20,10 @@ import numpy as np
 import warp as wp
 
 METRIC_NAMES = ("stretch_max", "stretch_mean", "penetration_count", "penetration_depth", "self_intersections",
-                "kinetic_energy", "nan")
+                "kinetic_energy", "nan", "slip")
+
+SLIP_BAND = 0.03
+"""Depth of the garment's top band whose slip is measured (m below its highest rest vertex)."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -27,12 +35,14 @@ class FailureThresholds:
         penetration_depth: depth of the deepest vertex inside the body [m].
         self_intersections: edge-triangle crossings of the cloth with itself.
         stretch: largest principal stretch minus one (strain blow-up).
+        slip: mean distance the garment's top band has moved away from its body anchors [m].
     """
 
     penetration_share: float = 0.01
     penetration_depth: float = 0.02
     self_intersections: int = 50
     stretch: float = 1.0
+    slip: float = 0.06
 
 
 @wp.kernel
@@ -85,6 +95,13 @@ def _crossings(cloth_meshes: wp.array(dtype=wp.uint64), face_base: wp.array(dtyp
     out[e] = n
 
 
+@wp.kernel
+def _slip(x: wp.array(dtype=wp.vec3), body: wp.array(dtype=wp.vec3), anchor: wp.array(dtype=wp.int32),
+          rest_distance: wp.array(dtype=float), out: wp.array(dtype=float)):
+    i = wp.tid()
+    out[i] = wp.length(x[i] - body[anchor[i]]) - rest_distance[i]
+
+
 class Metrics:
     """Measures every scene of a model each frame (arrays on the model's device)."""
 
@@ -105,6 +122,24 @@ class Metrics:
         self._face_scene = self._scene[h["faces"][:, 0]]
         self._edge_scene = self._scene[h["edges"][:, 0]]
         self._counts = np.bincount(self._scene, minlength=m.scene_count)
+        # slip: each vertex's closest body vertex at rest (its scene's body), and the top band
+        from scipy.spatial import cKDTree
+
+        X = h["rest_positions"]
+        anchor, rest_d = np.zeros(len(X), dtype=np.int32), np.zeros(len(X))
+        self._band = np.zeros(len(X), dtype=bool)
+        for s, (p0, p1) in enumerate(h["particle_range"]):
+            if s in h["scenes_without_body"]:
+                continue  # no body to slip off (its slip is 0)
+            b0, b1 = h["body_ranges"][s]
+            rest_d[p0:p1], a = cKDTree(h["body_rest"][b0:b1]).query(X[p0:p1])
+            anchor[p0:p1] = a + b0
+            self._band[p0:p1] = X[p0:p1, 1] > X[p0:p1, 1].max() - SLIP_BAND
+        self._band_count = np.bincount(self._scene, weights=self._band, minlength=m.scene_count)
+        with wp.ScopedDevice(m.device):
+            self._anchor = wp.array(anchor, dtype=wp.int32)
+            self._rest_d = wp.array(rest_d.astype(np.float32), dtype=float)
+            self._slip = wp.zeros(m.particle_count, dtype=float)
 
     def measure(self, state, solver) -> dict[str, np.ndarray]:
         """Metrics of every scene [scene_count] for the current state (the solver's body pose)."""
@@ -117,6 +152,7 @@ class Metrics:
                 mesh.refit()
             wp.launch(_crossings, m.edge_count, inputs=[self._ids, m.face_base, x_wp, m.particle_scene, m.faces,
                                                         m.edge_pairs, self._cross])
+            wp.launch(_slip, m.particle_count, inputs=[x_wp, solver.body_sub, self._anchor, self._rest_d, self._slip])
         x = x_wp.numpy().astype(np.float64)
         v = state.velocities.numpy().astype(np.float64)
         depth = self._depth.numpy()
@@ -139,6 +175,8 @@ class Metrics:
                 np.int64),
             "kinetic_energy": np.bincount(self._scene, weights=np.nan_to_num(ke, nan=np.inf), minlength=S),
             "nan": np.bincount(self._scene, weights=bad, minlength=S) > 0,
+            "slip": np.bincount(self._scene, weights=np.nan_to_num(self._slip.numpy(), nan=np.inf) * self._band,
+                                minlength=S) / np.maximum(self._band_count, 1),
         }
         np.maximum.at(out["stretch_max"], self._face_scene, np.nan_to_num(stretch, nan=np.inf))
         out["stretch_mean"] = (np.bincount(self._face_scene, weights=np.nan_to_num(stretch, nan=np.inf) * area,
@@ -159,6 +197,9 @@ class Metrics:
         if frame["self_intersections"][scene] > thresholds.self_intersections:
             return (f"self-intersection: {frame['self_intersections'][scene]} edge-triangle crossings "
                     f"(limit {thresholds.self_intersections})")
+        if frame["slip"][scene] > thresholds.slip:
+            return (f"slip: the garment's top moved {frame['slip'][scene] * 100:.1f} cm off the body points that "
+                    f"carry it (limit {thresholds.slip * 100:.0f} cm): it is sliding off the body")
         if frame["stretch_max"][scene] > thresholds.stretch:
             return f"stretch: a triangle stretched by {frame['stretch_max'][scene]:.0%} (limit {thresholds.stretch:.0%})"
         return None

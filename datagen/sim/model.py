@@ -27,6 +27,7 @@ class _ClothPart:
     scene: int
     frames: np.ndarray | None
     pinned: np.ndarray | None
+    weft_scale: np.ndarray | None = None
 
 
 @dataclass
@@ -40,8 +41,9 @@ class ClothModel:
         active: 1 for simulated vertices, 0 for pinned ones.
         particle_scene: scene index per vertex.
         faces: triangles [face_count, 3] (global vertex ids).
-        dm_inv: inverse rest shape matrix of every triangle in its material frame [1/m].
-        tri_area: rest area [m²].
+        dm_inv: inverse rest shape matrix of every triangle in its material frame [1/m] (the
+            built shape, its weft row scaled by the face's ``weft_scale``).
+        tri_area: rest area [m²] (the built area times ``weft_scale``; mass is the built area's).
         tri_stiff: (k_u, k_v, k_uv, k_s) [N/m] per triangle.
         edges: [edge_count, 4]: hinge (0, 1) and opposite corners (2, 3; -1 on a boundary).
         rest_angle: rest dihedral angle [rad]; bend_k: 3 k_b |ē|²/(Ā₁+Ā₂) [N·m].
@@ -74,7 +76,8 @@ class ClothModelBuilder:
         self._bodies[int(scene)] = (v, f)
 
     def add_cloth(self, vertices, faces, *, material_name: Material | str = "cotton", scene: int = 0,
-                  material_frames: np.ndarray | None = None, pinned: np.ndarray | None = None) -> int:
+                  material_frames: np.ndarray | None = None, pinned: np.ndarray | None = None,
+                  weft_scale: np.ndarray | None = None) -> int:
         """Add a cloth mesh to ``scene``; returns the id its first vertex will have in the model
         when cloths are added in scene order (``finalize`` groups them by scene).
 
@@ -85,19 +88,29 @@ class ClothModelBuilder:
             material_frames: unit weft/warp directions per face [F, 2, 3] (garments give them);
                 without them the first edge of each face is the weft.
             pinned: indices of vertices held at their targets (tests: a hanging strip).
+            weft_scale: rest length along the weft relative to ``vertices``, per face [F] (an
+                elastic waistband: below 1, the face is stretched around the body as built).
         """
         v, f = _checked_mesh(vertices, faces, "cloth")
         if scene < 0:
             raise InputError(f"scene index must be >= 0, got {scene}")
+        if weft_scale is not None:
+            weft_scale = np.asarray(weft_scale, dtype=np.float64).reshape(-1)
+            if weft_scale.shape != (len(f),) or not (np.isfinite(weft_scale).all() and (weft_scale > 0.5).all()
+                                                      and (weft_scale <= 1.5).all()):
+                raise InputError(f"weft_scale must hold one value in (0.5, 1.5] per face ({len(f)}), got shape "
+                                 f"{weft_scale.shape}")
         first = sum(len(p.vertices) for p in self._parts)
         self._parts.append(_ClothPart(v, f, material(material_name), int(scene), material_frames,
-                                      None if pinned is None else np.asarray(pinned, dtype=np.int64)))
+                                      None if pinned is None else np.asarray(pinned, dtype=np.int64), weft_scale))
         return first
 
     def add_garment(self, garment, *, scene: int = 0, material_name: Material | str | None = None) -> int:
-        """Add a :class:`~datagen.garment.mesh.GarmentMesh` (its material and material frames)."""
+        """Add a :class:`~datagen.garment.mesh.GarmentMesh` (its material, material frames and
+        waistband)."""
         return self.add_cloth(garment.vertices, garment.faces, material_name=material_name or garment.material,
-                              scene=scene, material_frames=garment.material_frames())
+                              scene=scene, material_frames=garment.material_frames(),
+                              weft_scale=garment.weft_rest_scale())
 
     def finalize(self, device: str | None = None) -> ClothModel:
         import warp as wp
@@ -106,7 +119,7 @@ class ClothModelBuilder:
             raise InputError("the model has no cloth: add a garment first")
         device = str(wp.get_device(device))
         self._parts.sort(key=lambda p: p.scene)  # stable: each scene's cloth contiguous
-        verts, faces, scene_of, frames, mats, pins, face_mat = [], [], [], [], [], [], []
+        verts, faces, scene_of, frames, mats, pins, face_mat, wscale = [], [], [], [], [], [], [], []
         base = 0
         for k, p in enumerate(self._parts):
             verts.append(p.vertices)
@@ -115,6 +128,7 @@ class ClothModelBuilder:
             frames.append(p.frames if p.frames is not None else _edge_frames(p.vertices, p.faces))
             mats.append(p.material)
             face_mat.append(np.full(len(p.faces), k))
+            wscale.append(np.ones(len(p.faces)) if p.weft_scale is None else p.weft_scale)
             if p.pinned is not None:
                 pins.append(p.pinned + base)
             base += len(p.vertices)
@@ -137,6 +151,8 @@ class ClothModelBuilder:
         warp_dir = np.cross(nrm, weft)
         Dm = np.stack([np.stack([np.einsum("ij,ij->i", e1, weft), np.einsum("ij,ij->i", e2, weft)], 1),
                        np.stack([np.einsum("ij,ij->i", e1, warp_dir), np.einsum("ij,ij->i", e2, warp_dir)], 1)], 1)
+        weft_scale = np.concatenate(wscale)
+        Dm[:, 0, :] *= weft_scale[:, None]  # a shrunk weft: the rest shape is shorter around the body
         dm_inv = np.linalg.inv(Dm)  # F(x) = Ds Dm⁻¹ with Ds = [x1 - x0, x2 - x0]
         stiff = np.array([[m.stretch_weft, m.stretch_warp, m.poisson * np.sqrt(m.stretch_weft * m.stretch_warp), m.shear]
                           for m in mats])[fm]
@@ -173,7 +189,7 @@ class ClothModelBuilder:
         if pins:
             active[np.concatenate(pins)] = 0
         host.update(rest_positions=X, faces=F, particle_scene=scene, mass=mass, vertex_area=varea, dm_inv=dm_inv,
-                    tri_area=area, tri_stiff=stiff, rest_angle=rest_angle, bend_k=bend_k, active=active,
+                    tri_area=area * weft_scale, tri_stiff=stiff, rest_angle=rest_angle, bend_k=bend_k, active=active,
                     damping=damping, friction=friction, thickness=thickness)
         scene_count = max(int(scene.max()), max(self._bodies, default=0)) + 1
         missing = sorted(set(range(scene_count)) - set(self._bodies))

@@ -136,6 +136,8 @@ class SceneArrays:
         garment_faces: triangles [F, 3].
         material: material preset name.
         material_frames: weft and warp directions per face [F, 2, 3].
+        weft_scale: rest length along the weft relative to the built mesh, per face [F] (below 1
+            on an elastic waistband).
         body_frames: posed body vertices of every motion frame, lead-in included [N, B, 3] (m).
         body_faces: body triangles [Fb, 3].
         fps: frame rate [1/s].
@@ -146,6 +148,7 @@ class SceneArrays:
     garment_faces: np.ndarray
     material: str
     material_frames: np.ndarray
+    weft_scale: np.ndarray
     body_frames: np.ndarray
     body_faces: np.ndarray
     fps: float
@@ -170,7 +173,7 @@ def scene_arrays(scene: Scene, lead_in: float) -> SceneArrays:
         raise InputError("the motion's lead-in does not start in the body's rest pose")
     g = s.garment
     return SceneArrays(garment_vertices=g.vertices + shift.mean(0), garment_faces=np.asarray(g.faces),
-                       material=g.material.name, material_frames=g.material_frames(),
+                       material=g.material.name, material_frames=g.material_frames(), weft_scale=g.weft_rest_scale(),
                        body_frames=verts.astype(np.float32), body_faces=np.asarray(s.body.faces),
                        fps=float(s.motion.fps), lead_frames=int(lead))
 
@@ -188,7 +191,8 @@ def load_scene_arrays(path) -> list[SceneArrays]:
     with np.load(path) as d:
         out = []
         for k in range(int(d["scene_count"])):
-            f = {name: d[f"s{k}_{name}"] for name in SceneArrays.__dataclass_fields__}
+            f = {name: d[f"s{k}_{name}"] for name in SceneArrays.__dataclass_fields__ if f"s{k}_{name}" in d}
+            f.setdefault("weft_scale", np.ones(len(f["garment_faces"])))  # files from before waistbands
             f["material"], f["fps"], f["lead_frames"] = str(f["material"]), float(f["fps"]), int(f["lead_frames"])
             out.append(SceneArrays(**f))
     return out
@@ -239,7 +243,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     body_frames = []
     for k, a in enumerate(arrays):
         builder.add_cloth(a.garment_vertices, a.garment_faces, material_name=a.material, scene=k,
-                          material_frames=a.material_frames)
+                          material_frames=a.material_frames, weft_scale=a.weft_scale)
         builder.add_body(a.body_frames[0], a.body_faces, scene=k)
         body_frames.append(a.body_frames)
     lead = arrays[0].lead_frames

@@ -241,9 +241,7 @@ class SolverVBD:
                 for mesh in self.body_meshes:
                     mesh.refit()
                 wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
-                                                     c.air_drag, h, self.x_prev, self.y, state.pinned_target,
-                                                     self.body_has, self.body_normal, self.body_disp, self.body_lambda,
-                                                     m.friction])
+                                                     c.air_drag, h, self.x_prev, self.y, state.pinned_target])
                 wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, self.x_prev, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
                                                     self.body_radius, m.active, self.y, self.body_has, self.body_point,
@@ -280,6 +278,8 @@ class SolverVBD:
                                                       omega])
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
                                                            self.body_radius, c.body_stiffness, self.body_lambda])
+                wp.launch(K.body_friction, n, inputs=[x, self.x_prev, m.mass, m.active, self.body_has, self.body_normal,
+                                                      self.body_disp, self.body_lambda, m.friction, h])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
                 if c.body_projection:
                     for _ in range(2):  # a second pass for vertices the first put into another body part

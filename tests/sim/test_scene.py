@@ -23,6 +23,7 @@ def test_recorded_frames_are_copies_not_views_of_the_state_buffers():
     body_faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
     T = 8
     scene = SceneArrays(garment_vertices=verts, garment_faces=faces, material="cotton", material_frames=frames,
+                        weft_scale=np.ones(len(faces)),
                         body_frames=np.repeat(body[None], T, 0), body_faces=body_faces, fps=30.0, lead_frames=0)
     config = RunConfig(settle_rest=1, lead_in=0.0, settle_pose=0, ramp=0.0)
     (result,) = simulate([scene], config, device="cpu")

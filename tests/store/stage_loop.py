@@ -107,7 +107,8 @@ def sample(i: int, garment_vertices=GARMENT_VERTICES, body_vertices=BODY_VERTICE
                "metric_penetration_depth": rng.random(T_sim).astype(f32) * 1e-3,
                "metric_self_intersections": rng.integers(0, 3, T_sim).astype(np.int32),
                "metric_kinetic_energy": rng.random(T_sim).astype(f32),
-               "metric_nan": np.zeros(T_sim, np.uint8)}
+               "metric_nan": np.zeros(T_sim, np.uint8),
+               "metric_slip": rng.random(T_sim).astype(f32) * 1e-2}
     if failed:  # blew up at its frame 2: the metrics say so
         arrays["metric_nan"][2:] = 1
         arrays["metric_kinetic_energy"][2:] = np.inf
