@@ -13,9 +13,9 @@ Energies (per element, SI units; see ``docs/simulator.md``):
 - inertia ``m/(2h²)|x - y|²`` with ``y = x₀ + h v₀ + h² (g - c_air v₀ / ρ)``;
 - Rayleigh damping of the membrane and bending: ``(k_d/h) H_e (x - x₀)``;
 - contacts: ``k_c/2 (r - d)²`` for a distance d below the radius r, against the body (one
-  closest-point plane per vertex) and the cloth itself (vertex-triangle and edge-edge pairs),
-  with lagged Coulomb friction ``μ λ_n`` on the tangential displacement (smoothed below
-  ``ε_v h``).
+  closest-point plane per vertex) and the cloth itself (vertex-triangle and edge-edge pairs);
+  cloth-cloth Coulomb friction ``μ λ_n`` on the tangential displacement in the solve (smoothed
+  below ``ε_v h``), body friction on the substep's result (``body_friction``).
 
 Each vertex takes one Newton step on its local energy per colour sweep (Chen et al. 2024,
 "Vertex Block Descent", SIGGRAPH), with Gauss-Seidel order across colours. Within a colour every
