@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["body_sdf", "cut_mesh", "extract_surface", "largest_component", "remesh", "smin"]
+__all__ = ["body_sdf", "collapse_short_edges", "cut_mesh", "extract_surface", "largest_component", "remesh", "smin"]
 
 
 def _warp():
@@ -204,3 +204,100 @@ def remesh(vertices: np.ndarray, faces: np.ndarray, edge_length: float, iteratio
     ms.meshing_remove_unreferenced_vertices()
     m = ms.current_mesh()
     return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)
+
+
+def collapse_short_edges(vertices: np.ndarray, faces: np.ndarray, min_length: float) -> tuple[np.ndarray, np.ndarray]:
+    """Collapse edges shorter than ``min_length`` that touch an open boundary.
+
+    Isotropic remeshing keeps the boundary as it is, so the cut's uneven spacing survives it: a
+    boundary edge a tenth of the target long, or an inner edge ending on the boundary, gives a
+    triangle that a millimetre of motion stretches by 100 %. A boundary edge collapses to its
+    midpoint; an inner edge with one boundary end collapses onto that end (the boundary keeps its
+    shape). A collapse is made only when it keeps the surface a manifold (the two ends share no
+    neighbour but the corners of the triangles on the edge), leaves every boundary loop at least
+    four vertices long and flips no triangle. Edges inside the surface are left to the remesher.
+    """
+    v = np.array(vertices, dtype=np.float64)
+    f = np.array(faces, dtype=np.int64)
+    alive = np.ones(len(f), dtype=bool)
+    for _ in range(8):
+        live = f[alive]
+        e = np.concatenate([live[:, [0, 1]], live[:, [1, 2]], live[:, [2, 0]]])
+        key = np.sort(e, axis=1)
+        uniq, count = np.unique(key, axis=0, return_counts=True)
+        boundary_edges = uniq[count == 1]
+        on_boundary = np.zeros(len(v), dtype=bool)
+        on_boundary[boundary_edges.ravel()] = True
+        length = np.linalg.norm(v[uniq[:, 0]] - v[uniq[:, 1]], axis=1)
+        touches = on_boundary[uniq].any(1)
+        candidates = np.flatnonzero((length < min_length) & touches)
+        if len(candidates) == 0:
+            break
+        boundary_set = {tuple(x) for x in boundary_edges.tolist()}
+        # vertex -> faces, built once per pass; a collapse marks its neighbourhood as touched
+        vf: dict[int, list[int]] = {}
+        for fi in np.flatnonzero(alive):
+            for x in f[fi]:
+                vf.setdefault(int(x), []).append(int(fi))
+        touched: set[int] = set()
+        loop_len = _boundary_loop_lengths(boundary_edges)
+        made = 0
+        for ci in candidates[np.argsort(length[candidates])]:
+            a, b = (int(x) for x in uniq[ci])
+            if a in touched or b in touched:
+                continue
+            is_boundary_edge = (a, b) in boundary_set
+            if not is_boundary_edge and on_boundary[a] and on_boundary[b]:
+                continue  # a chord between two boundary points: collapsing it pinches the surface
+            if is_boundary_edge and loop_len.get(a, 0) <= 4:
+                continue
+            if not on_boundary[a]:
+                a, b = b, a  # keep the boundary end ``a``
+            target = 0.5 * (v[a] + v[b]) if is_boundary_edge else v[a]
+            fa, fb = set(vf.get(a, ())), set(vf.get(b, ()))
+            shared = fa & fb
+            opposite = {int(x) for fi in shared for x in f[fi]} - {a, b}
+            na = {int(x) for fi in fa for x in f[fi]} - {a}
+            nb = {int(x) for fi in fb for x in f[fi]} - {b}
+            if (na & nb) != opposite:
+                continue  # the link condition: a collapse here would glue two sheets together
+            ok = True
+            for fi in (fa | fb) - shared:
+                tri = f[fi]
+                old = np.cross(v[tri[1]] - v[tri[0]], v[tri[2]] - v[tri[0]])
+                p = v[tri].copy()
+                p[(tri == a) | (tri == b)] = target
+                new = np.cross(p[1] - p[0], p[2] - p[0])
+                if np.dot(old, new) <= 0.2 * np.linalg.norm(old) * np.linalg.norm(new):
+                    ok = False
+                    break
+            if not ok:
+                continue
+            v[a] = target
+            for fi in fb - shared:
+                f[fi][f[fi] == b] = a
+            alive[list(shared)] = False
+            touched |= na | nb | {a, b}
+            made += 1
+        if made == 0:
+            break
+    f = f[alive]
+    used = np.unique(f)
+    remap = np.full(len(v), -1, dtype=np.int64)
+    remap[used] = np.arange(len(used))
+    return v[used], remap[f]
+
+
+def _boundary_loop_lengths(boundary_edges: np.ndarray) -> dict[int, int]:
+    """For each boundary vertex, the number of vertices of its boundary loop."""
+    import scipy.sparse as sp
+    from scipy.sparse.csgraph import connected_components
+
+    if len(boundary_edges) == 0:
+        return {}
+    n = int(boundary_edges.max()) + 1
+    g = sp.coo_matrix((np.ones(len(boundary_edges)), (boundary_edges[:, 0], boundary_edges[:, 1])), shape=(n, n))
+    _, label = connected_components(g, directed=False)
+    verts = np.unique(boundary_edges)
+    size = np.bincount(label[verts])
+    return {int(x): int(size[label[x]]) for x in verts}

@@ -31,7 +31,7 @@ MIN_CLEARANCE = 0.008
 MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
-BUILDER_VERSION = 3
+BUILDER_VERSION = 4
 
 
 _TOP = {
@@ -194,10 +194,14 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     v, f = levelset.remesh(rough_v, rough_f, target_edge_length, iterations=5)
     v, f = levelset.cut_mesh(v, f, keep(v), snap=0.3 * target_edge_length)
     v, f = levelset.largest_component(v, f)
+    # the remesher keeps the boundary, so even out the cut's spacing first: short edges on the
+    # boundary make triangles that a millimetre of motion stretches by 100 %
+    v, f = levelset.collapse_short_edges(v, f, MIN_EDGE_FRACTION * target_edge_length)
     v, f = levelset.remesh(v, f, target_edge_length, iterations=5)
     v, f = levelset.largest_component(v, f)
     v, f = levelset.split_pinched_vertices(v, f)
     v, f = levelset.close_small_holes(v, f, 8)
+    v, f = levelset.collapse_short_edges(v, f, MIN_EDGE_FRACTION * target_edge_length)
     region_names, vertex_region, chart = regions(v)
     waistband = None if waist_top is None else _waistband(v, body, waist_top)
     uv, face_uv, wrap_seam = _panel_uvs(v, f, vertex_region, region_names, chart)
@@ -209,6 +213,10 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     return GarmentMesh.create(v, f, uv=uv, vertex_region=vertex_region, region_names=region_names, material=mat,
                               metadata=meta, face_uv=face_uv, extra_seam=wrap_seam)
 
+
+MIN_EDGE_FRACTION = 0.5
+"""Edges touching a garment's open boundary shorter than this share of the target edge length are
+collapsed after the cut (:func:`~datagen.garment.levelset.collapse_short_edges`)."""
 
 WAISTBAND_WIDTH = 0.04
 """Height of the elastic band below the waist opening of skirts, pants and shorts (m)."""
