@@ -52,39 +52,41 @@ def run(args) -> None:
     print(f"device {dev} ({dev.name}); tshirt {len(d['garment'])} vertices, {len(d['faces'])} faces; body "
           f"{body.shape[1]} vertices; {min(args.frames, len(body) - 1)} timed frames at 30 fps, {SolverConfig().substeps} substeps x "
           f"{SolverConfig().iterations} iterations")
-    print(f"{'batch':>5} {'self':>5} {'ms/frame':>9} {'garment-frames/s':>17} {'MB/scene':>9} {'pen':>5} {'self-x':>6} "
+    print(f"{'batch':>5} {'self':>5} {'graph':>5} {'ms/frame':>9} {'garment-frames/s':>17} {'MB/scene':>9} {'pen':>5} {'self-x':>6} "
           f"{'stretch':>8}")
-    for self_col in (True, False):
-        for n in [int(b) for b in args.batches.split(",")]:
-            b = ClothModelBuilder()
-            for s in range(n):
-                b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s,
-                            material_frames=d["frames"])
-                b.add_body(body[0], d["body_faces"], scene=s)
-            wp.synchronize()
-            mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
-            m = b.finalize(str(dev))
-            solver = SolverVBD(m, SolverConfig(self_collision=self_col))
-            metrics = Metrics(m)
-            a, c = ClothState.from_model(m), ClothState.from_model(m)
-            ctrl = BodyControl.from_numpy(m, np.tile(body[0], (n, 1)))
-            solver.reset_body(ctrl)
-            frames = [np.tile(f, (n, 1)) for f in body[:args.frames + 1]]
-            solver.step(a, c, ctrl, 1 / 30)  # warm-up (compiles kernels)
+    graph_modes = {"on": True, "off": False}
+    for self_col, graph, n in [(sc, graph_modes[g], int(b)) for sc in (True, False) for g in args.cuda_graph.split(",")
+                               for b in args.batches.split(",")]:
+        b = ClothModelBuilder()
+        for s in range(n):
+            b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s,
+                        material_frames=d["frames"])
+            b.add_body(body[0], d["body_faces"], scene=s)
+        wp.synchronize()
+        mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
+        m = b.finalize(str(dev))
+        solver = SolverVBD(m, SolverConfig(self_collision=self_col, cuda_graph=graph))
+        metrics = Metrics(m)
+        a, c = ClothState.from_model(m), ClothState.from_model(m)
+        ctrl = BodyControl.from_numpy(m, np.tile(body[0], (n, 1)))
+        solver.reset_body(ctrl)
+        frames = [np.tile(f, (n, 1)) for f in body[:args.frames + 1]]
+        for _ in range(2):  # warm-up: compiles kernels, captures the two graphs (a -> c, c -> a)
+            solver.step(a, c, ctrl, 1 / 30)
             a, c = c, a
-            wp.synchronize()
-            t = time.perf_counter()
-            for f in frames[1:]:
-                ctrl.set(f)
-                solver.step(a, c, ctrl, 1 / 30)
-                a, c = c, a
-            wp.synchronize()
-            dt = (time.perf_counter() - t) / (len(frames) - 1)
-            mem = (wp.get_mempool_used_mem_current(dev) - mem0) / n / 2**20 if dev.is_cuda else float("nan")
-            fr = metrics.measure(a, solver)
-            print(f"{n:5d} {'on' if self_col else 'off':>5} {dt * 1000:9.1f} {n / dt:17.1f} {mem:9.1f} "
-                  f"{fr['penetration_count'][0]:5d} {fr['self_intersections'][0]:6d} {fr['stretch_max'][0]:8.3f}",
-                  flush=True)
+        wp.synchronize()
+        t = time.perf_counter()
+        for f in frames[1:]:
+            ctrl.set(f)
+            solver.step(a, c, ctrl, 1 / 30)
+            a, c = c, a
+        wp.synchronize()
+        dt = (time.perf_counter() - t) / (len(frames) - 1)
+        mem = (wp.get_mempool_used_mem_current(dev) - mem0) / n / 2**20 if dev.is_cuda else float("nan")
+        fr = metrics.measure(a, solver)
+        print(f"{n:5d} {'on' if self_col else 'off':>5} {'on' if graph else 'off':>5} {dt * 1000:9.1f} {n / dt:17.1f} {mem:9.1f} "
+              f"{fr['penetration_count'][0]:5d} {fr['self_intersections'][0]:6d} {fr['stretch_max'][0]:8.3f}",
+              flush=True)
 
 
 def prepare_runs(args) -> None:
@@ -158,7 +160,8 @@ def main() -> None:
     p.add_argument("--inputs", default="sim_inputs.npz")
     p.add_argument("--device", default="cpu")
     p.add_argument("--batches", default="1")
-    p.add_argument("--frames", type=int, default=30, help="timed frames (after one warm-up frame)")
+    p.add_argument("--frames", type=int, default=30, help="timed frames (after two warm-up frames)")
+    p.add_argument("--cuda-graph", default="on", help="on, off or on,off: replay each step as a CUDA graph (CUDA only)")
     p.set_defaults(func=run)
     p = sub.add_parser("prepare-runs", help="scenes for the long-run check (garments x motions)")
     p.add_argument("--out", default="sim_runs.pkl")

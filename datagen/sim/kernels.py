@@ -276,6 +276,17 @@ def interpolate_body(b0: wp.array(dtype=wp.vec3), b1: wp.array(dtype=wp.vec3), a
 
 
 @wp.kernel
+def face_bounds(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), lower: wp.array(dtype=wp.vec3),
+                upper: wp.array(dtype=wp.vec3)):
+    t = wp.tid()
+    a = x[faces[t, 0]]
+    b = x[faces[t, 1]]
+    c = x[faces[t, 2]]
+    lower[t] = wp.min(wp.min(a, b), c)
+    upper[t] = wp.max(wp.max(a, b), c)
+
+
+@wp.kernel
 def edge_bounds(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), pad: float,
                 lower: wp.array(dtype=wp.vec3), upper: wp.array(dtype=wp.vec3)):
     e = wp.tid()
@@ -321,8 +332,7 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
 
 
 @wp.kernel
-def detect_vertex_triangle(cloth_meshes: wp.array(dtype=wp.uint64), face_base: wp.array(dtype=wp.int32),
-                           x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
+def detect_vertex_triangle(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                            scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32),
                            nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32),
                            query: float, contact_radius: float, active: wp.array(dtype=wp.int32),
@@ -340,14 +350,12 @@ def detect_vertex_triangle(cloth_meshes: wp.array(dtype=wp.uint64), face_base: w
     p = x[i]
     lo = p - wp.vec3(query)
     hi = p + wp.vec3(query)
-    qry = wp.mesh_query_aabb(cloth_meshes[scene[i]], lo, hi)
-    base = face_base[scene[i]]
-    tl = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    qry = wp.bvh_query_aabb(face_bvh, lo, hi, wp.bvh_get_group_root(face_bvh, scene[i]))
+    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     cap = vt_tri.shape[1]
     cap_t = tv_vert.shape[1]
-    while wp.mesh_query_aabb_next(qry, tl):
-        t = base + tl
+    while wp.bvh_query_next(qry, t):
         a = faces[t, 0]
         b = faces[t, 1]
         c = faces[t, 2]
@@ -381,8 +389,7 @@ def detect_vertex_triangle(cloth_meshes: wp.array(dtype=wp.uint64), face_base: w
 
 
 @wp.kernel
-def detect_edge_edge(edge_bvhs: wp.array(dtype=wp.uint64), edge_base: wp.array(dtype=wp.int32),
-                     x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
+def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                      scene: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                      nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32), query: float,
                      contact_radius: float, ee_count: wp.array(dtype=wp.int32), ee_edge: wp.array2d(dtype=wp.int32),
@@ -396,13 +403,11 @@ def detect_edge_edge(edge_bvhs: wp.array(dtype=wp.uint64), edge_base: wp.array(d
     pb = x[b]
     lo = wp.min(pa, pb) - wp.vec3(query)
     hi = wp.max(pa, pb) + wp.vec3(query)
-    qry = wp.bvh_query_aabb(edge_bvhs[scene[a]], lo, hi)
-    base = edge_base[scene[a]]
-    fl = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    qry = wp.bvh_query_aabb(edge_bvh, lo, hi, wp.bvh_get_group_root(edge_bvh, scene[a]))
+    f = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     cap = ee_edge.shape[1]
-    while wp.bvh_query_next(qry, fl):
-        f = base + fl
+    while wp.bvh_query_next(qry, f):
         if f == e:
             continue
         c = edges[f, 0]

@@ -19,6 +19,8 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
+from datagen.sim.kernels import face_bounds
+
 METRIC_NAMES = ("stretch_max", "stretch_mean", "penetration_count", "penetration_depth", "self_intersections",
                 "kinetic_energy", "nan", "slip")
 
@@ -73,18 +75,15 @@ def _segment_crosses(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3)
 
 
 @wp.kernel
-def _crossings(cloth_meshes: wp.array(dtype=wp.uint64), face_base: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3),
-               scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+def _crossings(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                out: wp.array(dtype=wp.int32)):
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
-    qry = wp.mesh_query_aabb(cloth_meshes[scene[a]], wp.min(x[a], x[b]), wp.max(x[a], x[b]))
-    base = face_base[scene[a]]
-    tl = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    qry = wp.bvh_query_aabb(face_bvh, wp.min(x[a], x[b]), wp.max(x[a], x[b]), wp.bvh_get_group_root(face_bvh, scene[a]))
+    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
-    while wp.mesh_query_aabb_next(qry, tl):
-        t = base + tl
+    while wp.bvh_query_next(qry, t):
         i = faces[t, 0]
         j = faces[t, 1]
         k = faces[t, 2]
@@ -111,12 +110,12 @@ class Metrics:
         with wp.ScopedDevice(m.device):
             self._depth = wp.zeros(m.particle_count, dtype=float)
             self._cross = wp.zeros(m.edge_count, dtype=wp.int32)
-            self._pos = wp.clone(m.rest_positions)
             h = m.host
-            self._meshes = [wp.Mesh(points=self._pos[int(p0):int(p1)], indices=wp.array(
-                (h["faces"][f0:f1] - p0).astype(np.int32).ravel()))
-                for (p0, p1), (f0, f1) in zip(h["particle_range"], h["face_range"])]
-            self._ids = wp.array([x.id for x in self._meshes], dtype=wp.uint64)
+            # every scene's faces in one BVH, a group per scene (one refit per frame for the batch)
+            self._lo, self._hi = wp.zeros(m.face_count, dtype=wp.vec3), wp.zeros(m.face_count, dtype=wp.vec3)
+            wp.launch(face_bounds, m.face_count, inputs=[m.rest_positions, m.faces, self._lo, self._hi])
+            self._bvh = wp.Bvh(self._lo, self._hi, groups=wp.array(
+                h["particle_scene"][h["faces"][:, 0]].astype(np.int32), dtype=wp.int32))
         h = m.host
         self._scene = h["particle_scene"]
         self._face_scene = self._scene[h["faces"][:, 0]]
@@ -147,10 +146,9 @@ class Metrics:
         x_wp = state.positions
         with wp.ScopedDevice(m.device):
             wp.launch(_inside, m.particle_count, inputs=[solver.body_ids, x_wp, m.particle_scene, self._depth])
-            wp.copy(self._pos, x_wp)
-            for mesh in self._meshes:
-                mesh.refit()
-            wp.launch(_crossings, m.edge_count, inputs=[self._ids, m.face_base, x_wp, m.particle_scene, m.faces,
+            wp.launch(face_bounds, m.face_count, inputs=[x_wp, m.faces, self._lo, self._hi])
+            self._bvh.refit()
+            wp.launch(_crossings, m.edge_count, inputs=[self._bvh.id, x_wp, m.particle_scene, m.faces,
                                                         m.edge_pairs, self._cross])
             wp.launch(_slip, m.particle_count, inputs=[x_wp, solver.body_sub, self._anchor, self._rest_d, self._slip])
         x = x_wp.numpy().astype(np.float64)

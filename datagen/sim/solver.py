@@ -54,6 +54,9 @@ class SolverConfig:
         detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
             substep); each detection renews the move bounds from the current positions, so cloth
             pressed between the body and other cloth can follow a fast body.
+        cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
+            CUDA graph and replay it: the same kernels in the same order, without Python's
+            per-launch cost. Off, or on a CPU, every launch is made from Python.
     """
 
     substeps: int = 10
@@ -76,6 +79,7 @@ class SolverConfig:
     detection_interval: int = 2
     body_projection: bool = True
     projection_reach: float = 0.1
+    cuda_graph: bool = True
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -123,24 +127,25 @@ class SolverVBD:
             self.x_det = wp.clone(m.rest_positions)
             self.edge_lo, self.edge_hi = z3(ne), z3(ne)
             wp.launch(K.edge_bounds, ne, inputs=[m.rest_positions, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
-            # one body mesh, cloth mesh and edge BVH per scene, over views of the flat arrays:
-            # queries in each scene's own coordinates, so nothing depends on the batch
+            self.face_lo, self.face_hi = z3(nf), z3(nf)
+            wp.launch(K.face_bounds, nf, inputs=[m.rest_positions, m.faces, self.face_lo, self.face_hi])
+            # one body mesh per scene over views of the flat arrays (its closest-point and winding
+            # queries have no group root in warp 1.19); the cloth's faces and edges are each one BVH
+            # with a group per scene: one refit per detection for the whole batch, queries start at
+            # their scene's group root, and the pair lists are sorted, so nothing depends on the batch
             h = m.host
-            self.body_meshes, self.cloth_meshes, self.edge_bvhs = [], [], []
+            self.body_meshes = []
             for s in range(m.scene_count):
                 b0, b1 = h["body_ranges"][s]
                 bf0, bf1 = h["body_face_range"][s]
-                p0, p1 = h["particle_range"][s]
-                f0, f1 = h["face_range"][s]
-                e0, e1 = h["edge_range"][s]
                 self.body_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
                     (h["body_faces"][bf0:bf1] - b0).astype(np.int32).ravel())))
-                self.cloth_meshes.append(wp.Mesh(points=self.x_det[int(p0):int(p1)], indices=wp.array(
-                    (h["faces"][f0:f1] - p0).astype(np.int32).ravel())))
-                self.edge_bvhs.append(wp.Bvh(self.edge_lo[int(e0):int(e1)], self.edge_hi[int(e0):int(e1)]))
             self.body_ids = wp.array([x.id for x in self.body_meshes], dtype=wp.uint64)
-            self.cloth_ids = wp.array([x.id for x in self.cloth_meshes], dtype=wp.uint64)
-            self.edge_ids = wp.array([x.id for x in self.edge_bvhs], dtype=wp.uint64)
+            scene_of = h["particle_scene"]
+            self.face_bvh = wp.Bvh(self.face_lo, self.face_hi,
+                                   groups=wp.array(scene_of[h["faces"][:, 0]].astype(np.int32), dtype=wp.int32))
+            self.edge_bvh = wp.Bvh(self.edge_lo, self.edge_hi,
+                                   groups=wp.array(scene_of[h["edges"][:, 0]].astype(np.int32), dtype=wp.int32))
             self.vt_count = wp.zeros(n, dtype=wp.int32)
             self.tv_count = wp.zeros(nf, dtype=wp.int32)
             self.ee_count = wp.zeros(ne, dtype=wp.int32)
@@ -181,7 +186,7 @@ class SolverVBD:
         for _attempt in range(6):
             if state_out is not state_in:
                 state_out.assign(state_in)
-            need = self._step(state_out, control, float(dt))
+            need = self._run_step(state_out, control, float(dt))
             if need <= self.capacity:
                 self.body_start.assign(control.body_vertices)
                 return
@@ -191,6 +196,31 @@ class SolverVBD:
                 raise SimulationError("contact buffers overflowed in an in-place step; they have been grown: "
                                       "step with separate input and output states")
         raise SimulationError(f"contact buffers kept overflowing (last need {need} per element)")
+
+    def _run_step(self, state, control, dt: float) -> int:
+        """One step's launches (on CUDA replayed from a captured graph), then the contact capacity
+        the step needed."""
+        import warp as wp
+
+        dev = wp.get_device(self.model.device)
+        if not (self.config.cuda_graph and dev.is_cuda):
+            self._step(state, control, dt)
+            return self._needed()
+        # a graph bakes in its arrays and constants: one per (state, control, dt, capacity)
+        key = (id(state), id(control), dt, self.capacity)
+        graphs = self.__dict__.setdefault("_graphs", {})
+        if key not in graphs:
+            if len(graphs) > 8:
+                graphs.clear()
+            wp.load_module(self.K, device=dev)  # compile before capturing
+            with wp.ScopedDevice(dev), wp.ScopedCapture(device=dev) as capture:
+                self._step(state, control, dt)
+            graphs[key] = (capture.graph, state, control)  # keep the arrays the graph reads alive
+        wp.capture_launch(graphs[key][0])
+        return self._needed()
+
+    def _needed(self) -> int:
+        return int(self.needed.numpy().max()) if self.config.self_collision else 0
 
     def _detect_self(self) -> None:
         """Cloth-cloth pairs and every vertex's move bound at the positions ``x_det``."""
@@ -204,26 +234,27 @@ class SolverVBD:
         self.ee_count.zero_()
         if c.self_collision:
             xd = self.x_det
-            for mesh in self.cloth_meshes:
-                mesh.refit()
+            wp.launch(K.face_bounds, nf, inputs=[xd, m.faces, self.face_lo, self.face_hi])
+            self.face_bvh.refit()
             wp.launch(K.edge_bounds, ne, inputs=[xd, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
-            for bvh in self.edge_bvhs:
-                bvh.refit()
+            self.edge_bvh.refit()
             wp.launch(K.detect_vertex_triangle, n,
-                      inputs=[self.cloth_ids, m.face_base, xd, m.rest_positions, m.particle_scene, m.faces,
+                      inputs=[self.face_bvh.id, xd, m.rest_positions, m.particle_scene, m.faces,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
                               self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
             wp.launch(K.detect_edge_edge, ne,
-                      inputs=[self.edge_ids, m.edge_base, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
+                      inputs=[self.edge_bvh.id, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.ee_count,
                               self.ee_edge, self.min_dist])
+            wp.launch(K.sort_lists, n, inputs=[self.vt_count, self.vt_tri])
             wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
+            wp.launch(K.sort_lists, ne, inputs=[self.ee_count, self.ee_edge])
             wp.launch(K.count_needed, n, inputs=[self.vt_count, self.needed, 0])
             wp.launch(K.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
             wp.launch(K.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
         wp.launch(K.finish_bounds, n, inputs=[self.min_dist, c.bound_fraction, c.self_bound_floor, self.bound])
 
-    def _step(self, state, control, dt: float) -> int:
+    def _step(self, state, control, dt: float) -> None:
         import warp as wp
 
         K, m, c = self.K, self.model, self.config
@@ -287,4 +318,3 @@ class SolverVBD:
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
                             self.body_sub, 2.0 * c.body_query, self.body_radius, m.active, h, c.projection_reach, x, v,
                             self.projected])
-        return int(self.needed.numpy().max()) if c.self_collision else 0
