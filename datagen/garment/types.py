@@ -28,10 +28,14 @@ log = logging.getLogger(__name__)
 MIN_CLEARANCE = 0.008
 """Smallest distance (m) between the constructed garment surface and the body."""
 
+SHOULDER_CLEARANCE = 0.01
+"""Clearance (m) of a top over the shoulders, where it rests: the chest's clearance narrows to this
+at the shoulder joints' height."""
+
 MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
-BUILDER_VERSION = 4
+BUILDER_VERSION = 5
 
 
 _TOP = {
@@ -337,6 +341,11 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
             if sleeve:
                 along = np.clip((np.abs(pts[:, 0]) - sh[0]) / max(p["sleeve_length"], 1e-3), 0.0, 1.0)
                 e = np.where(np.abs(pts[:, 0]) > sh[0], (1 - along) * p["ease_chest"] + along * p["cuff_ease"], e)
+            # a top rests on the shoulders: the clearance narrows from the chest's to the least at
+            # the shoulder joints' height. With the chest's clearance there (up to 5 cm), a dress
+            # fell freely for 5 frames before its straps met the shoulders, and the weight of its
+            # skirt, caught at once, stretched the chest by 100 % in the rest settle
+            e = np.minimum(e, _interp(y, [chest_y, sh[1]], [p["ease_chest"], SHOULDER_CLEARANCE]))
         else:
             e = _interp(y, [waist_y, hip_y], [p["ease_waist"], p["ease_hip"]])
             if "leg_ease" in p:
