@@ -125,7 +125,8 @@ def run_scenes(args) -> None:
     scenes, names = d["scenes"], d["names"]
     lead_in = RunConfig().lead_in if args.lead_in is None else args.lead_in
     config = RunConfig(lead_in=lead_in, solver=SolverConfig(self_collision=not args.no_self_collision,
-                                                            body_projection=not args.no_projection))
+                                                            body_projection=not args.no_projection,
+                                                            body_friction=not args.no_body_friction))
     print(f"{len(scenes)} scenes in one batch, device {args.device}, {config}", flush=True)
     t0 = time.perf_counter()
 
@@ -178,6 +179,7 @@ def main() -> None:
     p.add_argument("--device", default="cpu")
     p.add_argument("--no-self-collision", action="store_true")
     p.add_argument("--no-projection", action="store_true", help="turn the end-of-substep body projection off")
+    p.add_argument("--no-body-friction", action="store_true", help="turn friction with the body off (diagnosis)")
     p.add_argument("--lead-in", type=float, default=None, help="seconds (default: RunConfig's)")
     p.add_argument("--out-dir", default=None, help="per-scene metrics (.npz) go here")
     p.set_defaults(func=run_scenes)

@@ -54,6 +54,8 @@ class SolverConfig:
         detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
             substep); each detection renews the move bounds from the current positions, so cloth
             pressed between the body and other cloth can follow a fast body.
+        body_friction: Coulomb friction with the body (``kernels.body_friction``); off only to
+            diagnose what it does.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -79,6 +81,7 @@ class SolverConfig:
     detection_interval: int = 2
     body_projection: bool = True
     projection_reach: float = 0.1
+    body_friction: bool = True
     cuda_graph: bool = True
 
     def __post_init__(self):
@@ -309,8 +312,10 @@ class SolverVBD:
                                                       omega])
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
                                                            self.body_radius, c.body_stiffness, self.body_lambda])
-                wp.launch(K.body_friction, n, inputs=[x, self.x_prev, m.mass, m.active, self.body_has, self.body_normal,
-                                                      self.body_disp, self.body_lambda, m.friction, h])
+                if c.body_friction:
+                    wp.launch(K.body_friction, n, inputs=[x, self.x_prev, m.mass, m.active, self.body_has,
+                                                          self.body_normal, self.body_disp, self.body_lambda,
+                                                          m.friction, h])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
                 if c.body_projection:
                     for _ in range(2):  # a second pass for vertices the first put into another body part

@@ -287,10 +287,15 @@ def test_even_subsample_is_deterministic_and_even(tshirt):
         d, _ = cKDTree(tshirt.vertices[idx]).query(tshirt.vertices[idx], k=2)
         return d[:, 1].min()
 
+    # count points packed hexagonally on the area A sit sqrt(2 A / (sqrt(3) count)) = 1.07 sqrt(A / count)
+    # apart; the greedy pick keeps at least 0.6 of that, a random pick is as close as the mesh's
+    # shortest edge (the garment builder keeps that at half the target edge length, so the ratio
+    # to a random pick depends on the mesh and is not what is tested)
+    ideal = np.sqrt(tshirt.metadata["rest_area_m2"] / count)
     random_pick = np.random.default_rng(0).choice(V, count, replace=False)
-    assert spacing(a) > 2 * spacing(random_pick)
+    assert spacing(a) > 0.6 * ideal and spacing(a) > 1.3 * spacing(random_pick)
     gap, _ = cKDTree(tshirt.vertices[a]).query(tshirt.vertices)  # every vertex has a chosen one nearby
-    assert gap.max() < 2.5 * np.sqrt(tshirt.metadata["rest_area_m2"] / count)
+    assert gap.max() < 2.5 * ideal
     np.testing.assert_array_equal(np.sort(even_subsample(tshirt.vertices, tshirt.faces, V)), np.arange(V))
     with pytest.raises(InputError, match="at most"):
         even_subsample(tshirt.vertices, tshirt.faces, V + 1)
