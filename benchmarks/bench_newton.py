@@ -53,7 +53,8 @@ def _load_scene(path: str, name: str) -> dict:
     schedule = [0.0, *schedule]  # the state before step k of the schedule is frame k here (frame 0: the drape)
     frames = a.body_frames
     return {"garment": a.garment_vertices, "faces": a.garment_faces, "material": a.material,
-            "frames": a.material_frames, "body_faces": a.body_faces, "body_vertices": frames.shape[1],
+            "frames": a.material_frames, "body_faces": a.body_faces, "body_face_part": a.body_face_part,
+            "body_vertices": frames.shape[1],
             "body": lambda f: body_at(frames, schedule[f]).astype(np.float32), "frame_count": len(schedule),
             "recorded_from": recorded_from}
 
@@ -91,7 +92,7 @@ class _Measure:
 
         b = ClothModelBuilder()
         b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=0, material_frames=d["frames"])
-        b.add_body(d["body"](0), d["body_faces"], scene=0)
+        b.add_body(d["body"](0), d["body_faces"], scene=0, face_part=d["body_face_part"])
         self.model = b.finalize(str(device))
         self.solver = SolverVBD(self.model, SolverConfig())
         self.metrics = Metrics(self.model)
@@ -121,7 +122,7 @@ def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure)
     b = ClothModelBuilder()
     for s in range(n):
         b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s, material_frames=d["frames"])
-        b.add_body(body(0), d["body_faces"], scene=s)
+        b.add_body(body(0), d["body_faces"], scene=s, face_part=d["body_face_part"])
     m = b.finalize(str(device))
     solver = SolverVBD(m, SolverConfig(**{**DRAPE_OPTIONS, "self_collision": self_col}))
     a, c = ClothState.from_model(m), ClothState.from_model(m)

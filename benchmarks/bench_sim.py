@@ -22,6 +22,7 @@ import numpy as np
 def prepare(args) -> None:
     from datagen.body.cache import default_body
     from datagen.body.shapes import resolve_betas
+    from datagen.body.skeleton import face_parts
     from datagen.garment.types import make_garment
     from datagen.motion.library import make_motion
 
@@ -33,7 +34,8 @@ def prepare(args) -> None:
     verts, _ = model.pose(np.repeat(betas[None], motion.frame_count, 0), poses, motion.trans)
     shift = (verts[0] - np.asarray(model.shaped(betas[None]))[0]).mean(0)
     np.savez_compressed(args.out, garment=g.vertices + shift, faces=g.faces, frames=g.material_frames(),
-                        material=g.material.name, body=verts.astype(np.float32), body_faces=model.faces)
+                        material=g.material.name, body=verts.astype(np.float32), body_faces=model.faces,
+                        body_face_part=face_parts(model.weights, model.faces))
     print(f"wrote {args.out}: tshirt {g.vertex_count} vertices, body {verts.shape[1]} vertices x {len(verts)} frames")
 
 
@@ -61,7 +63,8 @@ def run(args) -> None:
         for s in range(n):
             b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s,
                         material_frames=d["frames"])
-            b.add_body(body[0], d["body_faces"], scene=s)
+            b.add_body(body[0], d["body_faces"], scene=s,
+                       face_part=d["body_face_part"] if "body_face_part" in d else None)
         wp.synchronize()
         mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
         m = b.finalize(str(dev))

@@ -42,3 +42,35 @@ def parents_from_kintree(kintree: np.ndarray) -> np.ndarray:
         parents[n] = id_to_index.get(int(p), -1)
     parents[0] = -1
     return parents
+
+
+BODY_PARTS: tuple[tuple[str, tuple[str, ...]], ...] = (
+    ("torso", ("pelvis", "spine1", "spine2", "spine3", "neck", "left_collar", "right_collar", "head")),
+    ("left_arm", ("left_shoulder", "left_elbow", "left_wrist", "left_hand")),
+    ("right_arm", ("right_shoulder", "right_elbow", "right_wrist", "right_hand")),
+    ("left_leg", ("left_hip", "left_knee", "left_ankle", "left_foot")),
+    ("right_leg", ("right_hip", "right_knee", "right_ankle", "right_foot")),
+)
+"""The body's collision parts and the joints whose skinning weights make each one. A posed
+skinned body overlaps itself where parts meet (arm and torso at the armpit, hand and thigh):
+cloth between two parts needs a contact with each, which one closest point on the whole body
+cannot give (see ``datagen.sim``)."""
+
+
+def face_parts(weights: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The :data:`BODY_PARTS` index of every face [F] (int32): the part with the largest sum of
+    its joints' skinning weights over the face's three vertices.
+
+    Args:
+        weights: skinning weights [V, 24] in SMPL joint order.
+        faces: triangles [F, 3].
+    """
+    w = np.asarray(weights, dtype=np.float64)
+    if w.ndim != 2 or w.shape[1] != JOINT_COUNT:
+        raise ValueError(f"skinning weights must be [V, {JOINT_COUNT}], got {w.shape}")
+    group = np.zeros((JOINT_COUNT, len(BODY_PARTS)))
+    for p, (_name, joints) in enumerate(BODY_PARTS):
+        for j in joints:
+            group[SMPL_JOINT_NAMES.index(j), p] = 1.0
+    per_vertex = w @ group
+    return np.argmax(per_vertex[np.asarray(faces)].sum(1), axis=1).astype(np.int32)

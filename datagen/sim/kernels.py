@@ -147,27 +147,42 @@ def initial_guess(x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtyp
 
 @wp.kernel
 def body_friction(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
-                  active: wp.array(dtype=wp.int32), has: wp.array(dtype=wp.int32), normal: wp.array(dtype=wp.vec3),
-                  body_disp: wp.array(dtype=wp.vec3), lam: wp.array(dtype=float), friction: wp.array(dtype=float),
-                  h: float):
+                  active: wp.array(dtype=wp.int32), has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dtype=wp.vec3),
+                  body_disp: wp.array2d(dtype=wp.vec3), lam: wp.array2d(dtype=float), friction: wp.array(dtype=float),
+                  area: wp.array(dtype=float), max_pressure: float, h: float):
     """Coulomb friction on the substep's result: a vertex the body pushes with normal force λ
     loses up to μ λ h / m of its tangential velocity relative to the body over the substep (its
-    end position moves back along the slide; all of it when the slide is smaller: static).
+    end position moves back along the slide; all of it when the slide is smaller: static),
+    relative to the body part that presses it hardest. (Friction with every part that touches it
+    glued cloth caught between arm and torso to both, and the arm dragged it on.)
 
     This acts on whatever moved the vertex in the solve, the forces the cloth passes on included:
     the weight of a pair of pants hangs on its waistband through the membrane, and friction that
     only acted on each vertex's own predicted velocity (``forward_step``) let them slide off the
     hips. A friction force inside the vertex solve cannot do it: each vertex's Newton step
     is held by its neighbours' membrane stiffness, a thousand times the friction's, so the cloth
-    slid as if frictionless (a patch on a 20° plane with μ = 0.5)."""
+    slid as if frictionless (a patch on a 20° plane with μ = 0.5).
+
+    The normal force that friction sees is at most ``max_pressure`` x the vertex's area: a posed
+    skinned body overlaps itself where real skin would give way (arm and torso at the armpit), and
+    the penalty of cloth squeezed into such an overlap (50 N per vertex for 5 mm) pinned it while
+    the arm dragged its neighbours on: triangles there stretched past 100 %."""
     i = wp.tid()
-    if active[i] == 0 or mass[i] <= 0.0 or has[i] == 0 or lam[i] <= 0.0:
+    if active[i] == 0 or mass[i] <= 0.0:
         return
-    n = normal[i]
-    rel = (x[i] - x_prev[i]) - body_disp[i]
+    best = int(-1)
+    big = float(0.0)
+    for p in range(has.shape[1]):
+        if has[i, p] == 1 and lam[i, p] > big:
+            big = lam[i, p]
+            best = p
+    if best < 0:
+        return
+    n = normal[i, best]
+    rel = (x[i] - x_prev[i]) - body_disp[i, best]
     t = rel - n * wp.dot(rel, n)
     lt = wp.length(t)
-    allowed = friction[i] * lam[i] * h * h / mass[i]  # the tangential move friction can take back
+    allowed = friction[i] * wp.min(big, max_pressure * area[i]) * h * h / mass[i]  # the move friction can take back
     if lt <= allowed:
         x[i] = x[i] - t
     else:
@@ -296,38 +311,78 @@ def edge_bounds(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), p
     upper[e] = wp.max(a, b) + wp.vec3(pad)
 
 
+@wp.func
+def part_border(flags: int, u: float, v: float) -> bool:
+    """True when barycentric (u, v) lies on a border edge of a part face (``part_edge_flags``)."""
+    eps = 1.0e-5
+    w = 1.0 - u - v
+    return ((flags & 1) != 0 and w < eps) or ((flags & 2) != 0 and u < eps) or ((flags & 4) != 0 and v < eps)
+
+
 @wp.kernel
 def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
+                part_meshes: wp.array(dtype=wp.uint64), part_face_base: wp.array(dtype=wp.int32),
+                part_faces: wp.array(dtype=wp.int32), part_edge_flags: wp.array(dtype=wp.int32),
+                body_face_part: wp.array(dtype=wp.int32),
                 x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
                 body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
                 radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
                 inertia_target: wp.array(dtype=wp.vec3),
-                has: wp.array(dtype=wp.int32), point: wp.array(dtype=wp.vec3), normal: wp.array(dtype=wp.vec3),
-                body_disp: wp.array(dtype=wp.vec3)):
-    """Closest point of the body (this substep's pose) within ``query`` of each cloth vertex: a
-    contact plane (point, outward face normal) and the body's displacement there in the substep.
+                has: wp.array2d(dtype=wp.int32), point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
+                body_disp: wp.array2d(dtype=wp.vec3)):
+    """Contact planes of each cloth vertex with the body (this substep's pose), one slot per body
+    part: the closest point of the whole body within ``query`` (in its part's slot), and the
+    closest point of every other part within ``query`` that is not on that part's border (where
+    it meets the part the vertex is over). Each plane is a point, the outward face normal and the
+    body's displacement there in the substep. Where a posed body overlaps itself (arm and torso
+    at the armpit, a hand on the thigh) the cloth between the two parts gets a plane from each:
+    the nearest alone pushed it into the other part, from which the end-of-substep projection
+    then threw it out a hand's width away, tearing its triangles.
 
-    A vertex that the body's move has put closer than its contact radius (or just inside: less
-    than two radii deep, where the closest face is still the one it came through) is first moved
-    out along the normal, with its inertial target, so the body's push is never held back by the
-    cloth's conservative move bound (which is measured from these positions)."""
+    A vertex that the body's move has put closer than a plane's contact radius (or just behind
+    it: less than two radii) is first moved out along the normal (the pushes of its planes
+    added), with its inertial target, so the body's push is never held back by the cloth's
+    conservative move bound (which is measured from these positions)."""
     i = wp.tid()
-    has[i] = 0
+    P = has.shape[1]
+    for p in range(P):
+        has[i, p] = 0
     s = scene[i]
-    q = wp.mesh_query_point_no_sign(body_meshes[s], x[i], query)
-    if not q.result:
-        return
-    p, n, disp = body_surface_point(body_face_base[s] + q.face, q.u, q.v, body_faces, body_prev, body_now)
-    if wp.length(n) == 0.0:
-        return
-    has[i] = 1
-    point[i] = p
-    normal[i] = n
-    body_disp[i] = disp
-    d = wp.dot(x[i] - p, n)
-    if active[i] != 0 and d < radius[i] and d > -2.0 * radius[i]:
-        push = n * (radius[i] - d)
-        x[i] = x[i] + push
+    xi = x[i]
+    r = radius[i]
+    push = wp.vec3(0.0)
+    q = wp.mesh_query_point_no_sign(body_meshes[s], xi, query)
+    own = int(-1)
+    if q.result:
+        f = body_face_base[s] + q.face
+        own = body_face_part[f]
+        pt, n, disp = body_surface_point(f, q.u, q.v, body_faces, body_prev, body_now)
+        if wp.length(n) > 0.0:
+            has[i, own] = 1
+            point[i, own] = pt
+            normal[i, own] = n
+            body_disp[i, own] = disp
+            d = wp.dot(xi - pt, n)
+            if d < r and d > -2.0 * r:
+                push = push + n * (r - d)
+    for p in range(P):
+        mid = part_meshes[s * P + p]
+        if p != own and mid != wp.uint64(0):
+            qp = wp.mesh_query_point_no_sign(mid, xi, query)
+            if qp.result:
+                k = part_face_base[s * P + p] + qp.face
+                if not part_border(part_edge_flags[k], qp.u, qp.v):
+                    pt, n, disp = body_surface_point(part_faces[k], qp.u, qp.v, body_faces, body_prev, body_now)
+                    if wp.length(n) > 0.0:
+                        has[i, p] = 1
+                        point[i, p] = pt
+                        normal[i, p] = n
+                        body_disp[i, p] = disp
+                        d = wp.dot(xi - pt, n)
+                        if d < r and d > -2.0 * r:
+                            push = push + n * (r - d)
+    if active[i] != 0:
+        x[i] = xi + push
         inertia_target[i] = inertia_target[i] + push
 
 
@@ -595,12 +650,12 @@ def solve_colour(
     v2f: wp.array2d(dtype=wp.int32),
     v2e_offsets: wp.array(dtype=wp.int32),
     v2e: wp.array2d(dtype=wp.int32),
-    body_has: wp.array(dtype=wp.int32),
-    body_point: wp.array(dtype=wp.vec3),
-    body_normal: wp.array(dtype=wp.vec3),
-    body_disp: wp.array(dtype=wp.vec3),
+    body_has: wp.array2d(dtype=wp.int32),
+    body_point: wp.array2d(dtype=wp.vec3),
+    body_normal: wp.array2d(dtype=wp.vec3),
+    body_disp: wp.array2d(dtype=wp.vec3),
     body_radius: wp.array(dtype=float),
-    body_lambda: wp.array(dtype=float),
+    body_lambda: wp.array2d(dtype=float),
     body_k: float,
     vt_count: wp.array(dtype=wp.int32),
     vt_tri: wp.array2d(dtype=wp.int32),
@@ -697,16 +752,17 @@ def solve_colour(
                 fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local], -1.0)
                 force += fc
                 hess += hc
-    # the body
-    if body_has[i] == 1:
-        n = body_normal[i]
-        dist = wp.dot(xi - body_point[i], n)
-        r = body_radius[i]
-        if dist < r:
-            # normal only: friction with the body acts after the solve (body_friction)
-            fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0, -1.0)
-            force += fc
-            hess += hc
+    # the body: one plane per part (normal only: friction with the body acts after the solve,
+    # body_friction)
+    r = body_radius[i]
+    for p in range(body_has.shape[1]):
+        if body_has[i, p] == 1:
+            n = body_normal[i, p]
+            dist = wp.dot(xi - body_point[i, p], n)
+            if dist < r:
+                fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0, -1.0)
+                force += fc
+                hess += hc
     if wp.abs(wp.determinant(hess)) < 1.0e-20:
         x_out[i] = xi
         return
@@ -753,14 +809,16 @@ def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2:
 
 
 @wp.kernel
-def body_contact_force(x: wp.array(dtype=wp.vec3), has: wp.array(dtype=wp.int32), point: wp.array(dtype=wp.vec3),
-                       normal: wp.array(dtype=wp.vec3), radius: wp.array(dtype=float), k: float,
-                       lam: wp.array(dtype=float)):
-    """The body's normal force on each vertex at the end of a substep: the next substep's friction
-    normal force (lagged, as in IPC), so friction does not depend on the iterate's penetration."""
+def body_contact_force(x: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32), point: wp.array2d(dtype=wp.vec3),
+                       normal: wp.array2d(dtype=wp.vec3), radius: wp.array(dtype=float), k: float,
+                       lam: wp.array2d(dtype=float)):
+    """The body's normal force on each vertex at the end of a substep, per part plane: the next
+    substep's friction normal force (lagged, as in IPC), so friction does not depend on the
+    iterate's penetration."""
     i = wp.tid()
-    lam[i] = 0.0
-    if has[i] == 1:
-        d = wp.dot(x[i] - point[i], normal[i])
-        if d < radius[i]:
-            lam[i] = k * (radius[i] - d)
+    for p in range(has.shape[1]):
+        lam[i, p] = 0.0
+        if has[i, p] == 1:
+            d = wp.dot(x[i] - point[i, p], normal[i, p])
+            if d < radius[i]:
+                lam[i, p] = k * (radius[i] - d)

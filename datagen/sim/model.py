@@ -65,15 +65,25 @@ class ClothModelBuilder:
 
     def __init__(self) -> None:
         self._parts: list[_ClothPart] = []
-        self._bodies: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._bodies: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
-    def add_body(self, vertices, faces, *, scene: int = 0) -> None:
+    def add_body(self, vertices, faces, *, scene: int = 0, face_part=None) -> None:
         """The collider of ``scene``: a closed triangle mesh with outward normals; ``vertices`` is
-        its start pose [m] (each frame's pose comes in a :class:`~datagen.sim.state.BodyControl`)."""
+        its start pose [m] (each frame's pose comes in a :class:`~datagen.sim.state.BodyControl`).
+
+        ``face_part`` numbers the body part of every face [F] (0..7; default: one part), e.g.
+        :func:`datagen.body.skeleton.face_parts`. A cloth vertex gets a contact plane from its
+        closest point on the whole body and one from every other part near it, so cloth caught
+        where a posed body overlaps itself (between arm and torso, hand and thigh) is held by both
+        parts instead of being pushed by one into the other."""
         v, f = _checked_mesh(vertices, faces, "body")
         if scene in self._bodies:
             raise InputError(f"scene {scene} already has a body")
-        self._bodies[int(scene)] = (v, f)
+        part = np.zeros(len(f), dtype=np.int32) if face_part is None else np.asarray(face_part).reshape(-1)
+        if part.shape != (len(f),) or not np.issubdtype(part.dtype, np.integer) or part.min() < 0 or part.max() >= 8:
+            raise InputError(f"face_part must hold one part number in 0..7 per body face ({len(f)}), got shape "
+                             f"{part.shape} and dtype {part.dtype}")
+        self._bodies[int(scene)] = (v, f, part.astype(np.int32))
 
     def add_cloth(self, vertices, faces, *, material_name: Material | str = "cotton", scene: int = 0,
                   material_frames: np.ndarray | None = None, pinned: np.ndarray | None = None,
@@ -193,19 +203,22 @@ class ClothModelBuilder:
                     damping=damping, friction=friction, thickness=thickness)
         scene_count = max(int(scene.max()), max(self._bodies, default=0)) + 1
         missing = sorted(set(range(scene_count)) - set(self._bodies))
-        bv, bf, bs, bbase, body_ranges = [], [], [], 0, []
+        bv, bf, bp, bs, bbase, body_ranges = [], [], [], [], 0, []
         for s in range(scene_count):
             if s in self._bodies:
-                v, f = self._bodies[s]
+                v, f, part = self._bodies[s]
             else:  # a scene without a body gets a tiny far-away triangle, so no query ever finds it
                 v, f = np.array([[0.0, -1e4, 0.0], [1e-3, -1e4, 0.0], [0.0, -1e4, 1e-3]]), np.array([[0, 1, 2]])
+                part = np.zeros(1, dtype=np.int32)
             bv.append(v)
             bf.append(f + bbase)
+            bp.append(part)
             bs.append(np.full(len(v), s))
             body_ranges.append((bbase, bbase + len(v)))
             bbase += len(v)
-        host.update(body_rest=np.concatenate(bv), body_faces=np.concatenate(bf), body_vert_scene=np.concatenate(bs),
-                    body_ranges=np.array(body_ranges), scenes_without_body=missing)
+        host.update(body_rest=np.concatenate(bv), body_faces=np.concatenate(bf), body_face_part=np.concatenate(bp),
+                    body_vert_scene=np.concatenate(bs), body_ranges=np.array(body_ranges), scenes_without_body=missing)
+        host.update(_body_parts(host["body_faces"], host["body_face_part"], bs, scene_count))
         without_cloth = sorted(set(range(scene_count)) - set(scene.tolist()))
         if without_cloth:
             raise InputError(f"scenes {without_cloth} have a body but no cloth: number scenes 0..N-1, each with cloth")
@@ -234,7 +247,10 @@ class ClothModelBuilder:
                        face_base=i32(host["face_range"][:, 0]), edge_base=i32(host["edge_range"][:, 0]),
                        body_face_base=i32(host["body_face_range"][:, 0]),
                        edge_pairs=i32(E[:, :2]), body_rest=f32(host["body_rest"], wp.vec3),
-                       body_faces=i32(host["body_faces"]), body_vert_scene=i32(host["body_vert_scene"]))
+                       body_faces=i32(host["body_faces"]), body_vert_scene=i32(host["body_vert_scene"]),
+                       body_face_part=i32(host["body_face_part"]), part_faces=i32(host["part_faces"]),
+                       part_edge_flags=i32(host["part_edge_flags"]),
+                       part_face_base=i32(host["part_face_range"][:, 0]))
             colours: list[list[np.ndarray]] = []
             conf = host["conflicts"]
             for s_, (p0, p1) in enumerate(host["particle_range"]):
@@ -247,6 +263,30 @@ class ClothModelBuilder:
         for k, a in arr.items():
             object.__setattr__(model, k, a)
         return model
+
+
+def _body_parts(body_faces: np.ndarray, face_part: np.ndarray, vert_scene: list, scene_count: int) -> dict:
+    """Every scene's body faces grouped by part, slot ``scene * P + part`` (P = ``body_part_count``):
+    ``part_faces`` (global face ids, slot by slot), ``part_face_range`` [S*P, 2] and
+    ``part_edge_flags`` (bit k: the face's edge from corner k to corner k+1 is on the part's
+    border, where it meets another part: a closest point there belongs to the other part)."""
+    P = int(face_part.max()) + 1
+    face_scene = np.concatenate(vert_scene)[body_faces[:, 0]]
+    faces, flags, ranges = [], [], []
+    start = 0
+    for s in range(scene_count):
+        for p in range(P):
+            sel = np.flatnonzero((face_scene == s) & (face_part == p))
+            F = body_faces[sel]
+            e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], 2).reshape(-1, 2), axis=1)
+            _, inv, count = np.unique(e, axis=0, return_inverse=True, return_counts=True)
+            border = (count[inv.ravel()] == 1).reshape(-1, 3)
+            faces.append(sel)
+            flags.append((border * np.array([1, 2, 4])).sum(1))
+            ranges.append((start, start + len(sel)))
+            start += len(sel)
+    return {"body_part_count": P, "part_faces": np.concatenate(faces), "part_edge_flags": np.concatenate(flags),
+            "part_face_range": np.array(ranges, dtype=np.int64)}
 
 
 def _checked_mesh(vertices, faces, what: str) -> tuple[np.ndarray, np.ndarray]:

@@ -26,6 +26,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from datagen.body.skeleton import face_parts
 from datagen.errors import InputError
 from datagen.sim.metrics import METRIC_NAMES, FailureThresholds, Metrics
 from datagen.sim.model import ClothModelBuilder
@@ -142,6 +143,8 @@ class SceneArrays:
         body_faces: body triangles [Fb, 3].
         fps: frame rate [1/s].
         lead_frames: lead-in frames at the start of ``body_frames`` (frame 0 is the rest pose).
+        body_face_part: body part of every body face [Fb] (:func:`datagen.body.skeleton.face_parts`;
+            None: the body is one part).
     """
 
     garment_vertices: np.ndarray
@@ -153,6 +156,7 @@ class SceneArrays:
     body_faces: np.ndarray
     fps: float
     lead_frames: int
+    body_face_part: np.ndarray | None = None
 
     @property
     def frame_count(self) -> int:
@@ -175,14 +179,16 @@ def scene_arrays(scene: Scene, lead_in: float) -> SceneArrays:
     return SceneArrays(garment_vertices=g.vertices + shift.mean(0), garment_faces=np.asarray(g.faces),
                        material=g.material.name, material_frames=g.material_frames(), weft_scale=g.weft_rest_scale(),
                        body_frames=verts.astype(np.float32), body_faces=np.asarray(s.body.faces),
-                       fps=float(s.motion.fps), lead_frames=int(lead))
+                       fps=float(s.motion.fps), lead_frames=int(lead),
+                       body_face_part=face_parts(s.body.weights, s.body.faces))
 
 
 def save_scene_arrays(path, scenes: list[SceneArrays], **extra) -> None:
     """Write scenes to one .npz (``s{k}_{field}`` keys), readable with numpy and warp alone."""
     data = {"scene_count": len(scenes)}
     for k, a in enumerate(scenes):
-        data.update({f"s{k}_{name}": np.asarray(getattr(a, name)) for name in SceneArrays.__dataclass_fields__})
+        data.update({f"s{k}_{name}": np.asarray(getattr(a, name)) for name in SceneArrays.__dataclass_fields__
+                     if getattr(a, name) is not None})
     np.savez_compressed(path, **data, **extra)
 
 
@@ -244,7 +250,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     for k, a in enumerate(arrays):
         builder.add_cloth(a.garment_vertices, a.garment_faces, material_name=a.material, scene=k,
                           material_frames=a.material_frames, weft_scale=a.weft_scale)
-        builder.add_body(a.body_frames[0], a.body_faces, scene=k)
+        builder.add_body(a.body_frames[0], a.body_faces, scene=k, face_part=a.body_face_part)
         body_frames.append(a.body_frames)
     lead = arrays[0].lead_frames
     model = builder.finalize(device)

@@ -56,6 +56,11 @@ class SolverConfig:
             pressed between the body and other cloth can follow a fast body.
         body_friction: Coulomb friction with the body (``kernels.body_friction``); off only to
             diagnose what it does.
+        friction_pressure: the largest body contact pressure that friction sees [Pa] (its normal
+            force per vertex is at most this x the vertex area). 2 kPa (15 mmHg) is about the
+            pressure of light compression wear; the elastic waistbands' grip is below it. Cloth
+            squeezed where the skinned body overlaps itself (the armpit) has a penalty force of
+            tens of N per vertex, which pinned it while the arm dragged its neighbours on.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -82,6 +87,7 @@ class SolverConfig:
     body_projection: bool = True
     projection_reach: float = 0.1
     body_friction: bool = True
+    friction_pressure: float = 2000.0
     cuda_graph: bool = True
 
     def __post_init__(self):
@@ -89,7 +95,7 @@ class SolverConfig:
             if int(getattr(self, name)) < 1:
                 raise InputError(f"solver {name} must be >= 1, got {getattr(self, name)}")
         for name in ("body_stiffness", "body_query", "self_radius", "self_stiffness", "self_query",
-                     "friction_velocity", "self_bound_floor"):
+                     "friction_velocity", "self_bound_floor", "friction_pressure"):
             if not float(getattr(self, name)) > 0:
                 raise InputError(f"solver {name} must be > 0, got {getattr(self, name)}")
         if self.self_query <= self.self_radius:
@@ -121,9 +127,10 @@ class SolverVBD:
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
-            self.body_lambda = wp.zeros(n, dtype=float)
-            self.body_has = wp.zeros(n, dtype=wp.int32)
-            self.body_point, self.body_normal, self.body_disp = z3(n), z3(n), z3(n)
+            P = int(m.host["body_part_count"])
+            self.body_lambda = wp.zeros((n, P), dtype=float)
+            self.body_has = wp.zeros((n, P), dtype=wp.int32)
+            self.body_point, self.body_normal, self.body_disp = (wp.zeros((n, P), dtype=wp.vec3) for _ in range(3))
             self.body_radius = wp.array(m.host["thickness"].astype(np.float32) + self.config.body_margin, dtype=float)
             self.body_start = wp.clone(m.body_rest)
             self.body_prev_sub, self.body_sub = z3(nb), wp.clone(m.body_rest)
@@ -144,6 +151,20 @@ class SolverVBD:
                 self.body_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
                     (h["body_faces"][bf0:bf1] - b0).astype(np.int32).ravel())))
             self.body_ids = wp.array([x.id for x in self.body_meshes], dtype=wp.uint64)
+            # and one mesh per body part of each scene (slot scene * P + part; id 0 for a part
+            # without faces), over the same vertex views
+            self.part_meshes, part_ids = [], []
+            for s in range(m.scene_count):
+                b0, b1 = h["body_ranges"][s]
+                for p in range(P):
+                    f0, f1 = h["part_face_range"][s * P + p]
+                    if f1 == f0:
+                        part_ids.append(0)
+                        continue
+                    self.part_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
+                        (h["body_faces"][h["part_faces"][f0:f1]] - b0).astype(np.int32).ravel())))
+                    part_ids.append(self.part_meshes[-1].id)
+            self.part_ids = wp.array(np.array(part_ids, dtype=np.uint64), dtype=wp.uint64)
             scene_of = h["particle_scene"]
             self.face_bvh = wp.Bvh(self.face_lo, self.face_hi,
                                    groups=wp.array(scene_of[h["faces"][:, 0]].astype(np.int32), dtype=wp.int32))
@@ -176,7 +197,12 @@ class SolverVBD:
         contacts and metrics read (its meshes refitted), as if a step had just ended there."""
         self.reset_body(control)
         self.body_sub.assign(control.body_vertices)
+        self._refit_body()
+
+    def _refit_body(self) -> None:
         for mesh in self.body_meshes:
+            mesh.refit()
+        for mesh in self.part_meshes:
             mesh.refit()
 
     def step(self, state_in, state_out, control, dt: float) -> None:
@@ -272,11 +298,12 @@ class SolverVBD:
                 wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / c.substeps,
                                                           self.body_prev_sub])
                 wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1, self.body_sub])
-                for mesh in self.body_meshes:
-                    mesh.refit()
+                self._refit_body()
                 wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
                                                      c.air_drag, h, self.x_prev, self.y, state.pinned_target])
-                wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, self.x_prev, m.particle_scene,
+                wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, self.part_ids, m.part_face_base,
+                                                    m.part_faces, m.part_edge_flags, m.body_face_part,
+                                                    self.x_prev, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
                                                     self.body_radius, m.active, self.y, self.body_has, self.body_point,
                                                     self.body_normal, self.body_disp])
@@ -315,7 +342,7 @@ class SolverVBD:
                 if c.body_friction:
                     wp.launch(K.body_friction, n, inputs=[x, self.x_prev, m.mass, m.active, self.body_has,
                                                           self.body_normal, self.body_disp, self.body_lambda,
-                                                          m.friction, h])
+                                                          m.friction, m.vertex_area, c.friction_pressure, h])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
                 if c.body_projection:
                     for _ in range(2):  # a second pass for vertices the first put into another body part
