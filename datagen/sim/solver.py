@@ -346,7 +346,8 @@ class SolverVBD:
                 if c.body_friction:
                     wp.launch(K.body_friction, n, inputs=[x, self.x_prev, m.mass, m.active, self.body_has,
                                                           self.body_normal, self.body_disp, self.body_lambda,
-                                                          m.friction, m.vertex_area, c.friction_pressure, h])
+                                                          m.friction, m.vertex_area, c.friction_pressure,
+                                                          self.x_det, self.bound, h])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
                 if c.body_projection:
                     for _ in range(2):  # a second pass for vertices the first put into another body part
