@@ -326,6 +326,27 @@ def part_border(flags: int, u: float, v: float) -> bool:
     return ((flags & 1) != 0 and w < eps) or ((flags & 2) != 0 and u < eps) or ((flags & 4) != 0 and v < eps)
 
 
+@wp.func
+def set_body_plane(i: int, p: int, f: int, u: float, v: float, xi: wp.vec3, r: float,
+                   body_faces: wp.array2d(dtype=wp.int32), body_prev: wp.array(dtype=wp.vec3),
+                   body_now: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32),
+                   point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
+                   body_disp: wp.array2d(dtype=wp.vec3)) -> wp.vec3:
+    """Store vertex i's contact plane with part p at barycentric (u, v) of body face f; returns
+    the push out along its normal when the vertex is closer than r (or less than 2r behind it)."""
+    pt, n, disp = body_surface_point(f, u, v, body_faces, body_prev, body_now)
+    if wp.length(n) == 0.0:
+        return wp.vec3(0.0)
+    has[i, p] = 1
+    point[i, p] = pt
+    normal[i, p] = n
+    body_disp[i, p] = disp
+    d = wp.dot(xi - pt, n)
+    if d < r and d > -2.0 * r:
+        return n * (r - d)
+    return wp.vec3(0.0)
+
+
 @wp.kernel
 def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
                 part_meshes: wp.array(dtype=wp.uint64), part_face_base: wp.array(dtype=wp.int32),
@@ -363,15 +384,8 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     if q.result:
         f = body_face_base[s] + q.face
         own = body_face_part[f]
-        pt, n, disp = body_surface_point(f, q.u, q.v, body_faces, body_prev, body_now)
-        if wp.length(n) > 0.0:
-            has[i, own] = 1
-            point[i, own] = pt
-            normal[i, own] = n
-            body_disp[i, own] = disp
-            d = wp.dot(xi - pt, n)
-            if d < r and d > -2.0 * r:
-                push = push + n * (r - d)
+        push = push + set_body_plane(i, own, f, q.u, q.v, xi, r, body_faces, body_prev, body_now, has, point, normal,
+                                     body_disp)
     for p in range(P):
         mid = part_meshes[s * P + p]
         if p != own and mid != wp.uint64(0):
@@ -379,15 +393,8 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
             if qp.result:
                 k = part_face_base[s * P + p] + qp.face
                 if not part_border(part_edge_flags[k], qp.u, qp.v):
-                    pt, n, disp = body_surface_point(part_faces[k], qp.u, qp.v, body_faces, body_prev, body_now)
-                    if wp.length(n) > 0.0:
-                        has[i, p] = 1
-                        point[i, p] = pt
-                        normal[i, p] = n
-                        body_disp[i, p] = disp
-                        d = wp.dot(xi - pt, n)
-                        if d < r and d > -2.0 * r:
-                            push = push + n * (r - d)
+                    push = push + set_body_plane(i, p, part_faces[k], qp.u, qp.v, xi, r, body_faces, body_prev,
+                                                 body_now, has, point, normal, body_disp)
     if active[i] != 0:
         x[i] = xi + push
         inertia_target[i] = inertia_target[i] + push
