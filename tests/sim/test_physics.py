@@ -284,6 +284,31 @@ def test_patch_on_tilted_plane_obeys_coulomb_friction(angle):
         assert slide < (coulomb + frictionless) / 2
 
 
+def test_friction_sees_at_most_the_capped_contact_pressure():
+    """The patch of the slope test on a 20° slope (μ = 0.5, areal density 0.13 kg/m²) presses on it
+    with ρ g cos a = 1.20 Pa and sticks (tan a < μ). With friction's contact pressure capped at
+    0.5 Pa (``friction_pressure``) friction can resist only μ 0.5 = 0.25 Pa of the 0.44 Pa of
+    sideways load: it slides by (ρ g sin a - 0.25) / ρ t²/2 = 0.72 m in 1 s; it must slide
+    more than half that and stay closer to it than to frictionless sliding (1.68 m)."""
+    mu, rho, cap, angle = 0.5, 0.13, 0.5, 20.0
+    material = Material(name="rough", density=rho, stretch_warp=1800.0, stretch_weft=1200.0, shear=60.0,
+                        poisson=0.3, bending=1.2e-5, friction=mu, thickness=0.0015)
+    r = material.thickness + MARGIN
+    R = rot_z(angle)
+    v0, f = grid(5, 5, 0.03, y=r)
+    pv, pf = plane(3.0)
+    x0 = v0 @ R.T
+    model = build((x0, f), material=material, body=(pv @ R.T, pf))
+    x, _ = simulate(model, SolverConfig(friction_pressure=cap), FPS)
+    slide = float((x - x0).mean(0) @ (R @ np.array([-1.0, 0.0, 0.0])))
+    a = np.radians(angle)
+    capped = (rho * G * np.sin(a) - mu * cap) / rho / 2
+    frictionless = G * np.sin(a) / 2
+    print(f"\nfriction pressure cap {cap} Pa on a {angle:.0f}° slope: slid {slide:.3f} m in 1 s (Coulomb with the cap "
+          f"{capped:.3f} m, frictionless {frictionless:.3f} m; uncapped it sticks)")
+    assert 0.5 * capped < slide < (capped + frictionless) / 2
+
+
 def tube_on_pole(band_scale: float, mu: float):
     """A 20 cm cotton tube (radius 6 cm) around a vertical pole of radius 5 cm, its top 4 cm an
     elastic band whose rest length around the pole is ``band_scale`` of the built one; returns
