@@ -180,6 +180,9 @@ def body_friction(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), m
     if best < 0:
         return
     n = normal[i, best]
+    for p in range(has.shape[1]):
+        if p != best and has[i, p] == 1 and lam[i, p] > 0.0 and wp.dot(normal[i, p], n) < 0.0:
+            return  # pinched between two parts pressing from opposite sides: it slides out
     rel = (x[i] - x_prev[i]) - body_disp[i, best]
     t = rel - n * wp.dot(rel, n)
     lt = wp.length(t)
