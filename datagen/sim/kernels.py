@@ -155,7 +155,8 @@ def body_friction(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), m
     loses up to μ λ h / m of its tangential velocity relative to the body over the substep (its
     end position moves back along the slide; all of it when the slide is smaller: static),
     relative to the body part that presses it hardest. (Friction with every part that touches it
-    glued cloth caught between arm and torso to both, and the arm dragged it on.)
+    glued cloth caught between arm and torso to both, and the arm dragged it on.) A vertex pinched
+    between two parts that press it from opposite sides gets none: it slides out of the pinch.
 
     This acts on whatever moved the vertex in the solve, the forces the cloth passes on included:
     the weight of a pair of pants hangs on its waistband through the membrane, and friction that
