@@ -129,7 +129,9 @@ def run_scenes(args) -> None:
     lead_in = RunConfig().lead_in if args.lead_in is None else args.lead_in
     config = RunConfig(lead_in=lead_in, solver=SolverConfig(self_collision=not args.no_self_collision,
                                                             body_projection=not args.no_projection,
-                                                            body_friction=not args.no_body_friction))
+                                                            body_friction=not args.no_body_friction,
+                                                            **({} if args.friction_pressure is None else
+                                                               {"friction_pressure": args.friction_pressure})))
     print(f"{len(scenes)} scenes in one batch, device {args.device}, {config}", flush=True)
     t0 = time.perf_counter()
 
@@ -184,6 +186,7 @@ def main() -> None:
     p.add_argument("--no-projection", action="store_true", help="turn the end-of-substep body projection off")
     p.add_argument("--no-body-friction", action="store_true", help="turn friction with the body off (diagnosis)")
     p.add_argument("--lead-in", type=float, default=None, help="seconds (default: RunConfig's)")
+    p.add_argument("--friction-pressure", type=float, default=None, help="Pa (default: SolverConfig's)")
     p.add_argument("--out-dir", default=None, help="per-scene metrics (.npz) go here")
     p.set_defaults(func=run_scenes)
     args = ap.parse_args()

@@ -15,6 +15,12 @@ sample:
   the elastic constants of plain woven fabrics by a tensile test in various directions", Fibres &
   Textiles in Eastern Europe 2014).
 - Friction: cloth on skin about 0.3-0.6 (Gerhardt et al., "Friction of textiles against skin").
+- Locking: fabrics are soft at small strains (crimp straightening, yarns rotating in shear) and
+  stiffen by an order of magnitude or more once the yarns are straight or the weave jams (the
+  "biphasic" curves of Wang et al. 2011; shear jamming at about 30-40 degrees). A linear membrane
+  with the small-strain stiffness lets a soft knit hang 40-50 % stretched from the shoulders; the
+  lock (stiffness x ``lock_ratio`` beyond a principal stretch of ``lock_strain``) is the second,
+  stiff branch of that curve.
 
 These are approximate presets for simulation, not measurements of particular fabrics; a user with
 measured values passes their own :class:`Material`.
@@ -44,6 +50,10 @@ class Material:
         friction: Coulomb friction coefficient against skin [-].
         thickness: cloth thickness used as collision distance [m].
         damping: stiffness-proportional damping [s].
+        lock_strain: principal stretch [-] beyond which the fabric locks (its yarns straightened,
+            its weave jammed in shear) and the membrane stiffens.
+        lock_ratio: the membrane stiffness added beyond ``lock_strain``, as a multiple of the
+            larger stretch stiffness [-].
     """
 
     name: str
@@ -56,6 +66,13 @@ class Material:
     friction: float
     thickness: float
     damping: float = 0.002
+    lock_strain: float = 0.3
+    lock_ratio: float = 20.0
+
+    def __post_init__(self):
+        if not (self.lock_strain > 0 and self.lock_ratio >= 0):
+            raise InputError(f"material {self.name!r}: lock_strain must be > 0 and lock_ratio >= 0, got "
+                             f"{self.lock_strain} and {self.lock_ratio}")
 
     def as_dict(self) -> dict:
         return asdict(self)

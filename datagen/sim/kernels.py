@@ -15,7 +15,8 @@ Energies (per element, SI units; see ``docs/simulator.md``):
 - contacts: ``k_c/2 (r - d)²`` for a distance d below the radius r, against the body (one
   closest-point plane per vertex) and the cloth itself (vertex-triangle and edge-edge pairs);
   cloth-cloth Coulomb friction ``μ λ_n`` on the tangential displacement in the solve (smoothed
-  below ``ε_v h``), body friction on the substep's result (``body_friction``).
+  below ``ε_v h``), body friction as a stick/slip projection of each vertex's Newton step
+  (``body_stick_slip``).
 
 Each vertex takes one Newton step on its local energy per colour sweep (Chen et al. 2024,
 "Vertex Block Descent", SIGGRAPH), with Gauss-Seidel order across colours. Within a colour every
@@ -118,7 +119,7 @@ def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: w
                  h: float, x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtype=wp.vec3),
                  pinned_target: wp.array(dtype=wp.vec3)):
     """Save x₀, form the inertial target y; pinned vertices move to their target (friction with the
-    body comes after the solve: ``body_friction``)."""
+    body acts in the solve: ``body_stick_slip``)."""
     i = wp.tid()
     x_prev[i] = x[i]
     if active[i] == 0:
@@ -132,13 +133,32 @@ def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: w
 
 @wp.kernel
 def initial_guess(x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtype=wp.vec3),
-                  bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
-    """Start the iterations at y, clipped to each vertex's conservative bound."""
+                  v: wp.array(dtype=wp.vec3), v_old: wp.array(dtype=wp.vec3), gravity: wp.vec3, h: float,
+                  body_lambda: wp.array2d(dtype=float), bound: wp.array(dtype=float),
+                  active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
+    """Start the iterations at y with only the part of gravity the vertex fell with over the last
+    substep (VBD's adaptive initialisation, Chen et al. 2024 §3.4: ã = clamp(a·ĝ, 0, |g|) ĝ with
+    a = (v - v_old)/h), clipped to each vertex's conservative bound.
+
+    Starting at y drops every hanging vertex by g h² that the sweeps must carry back through the
+    membrane; at 20 sweeps they had not, and the pull of the unconverged cloth slid a pair of
+    pants off the hips through Coulomb friction that holds their weight ten times over. A vertex
+    that the body pressed at the end of the last substep (``body_lambda``) starts at y: its weight
+    is what presses it, and body friction has cut y's slide (without the weight, the cut alone
+    started a patch on a slope uphill)."""
     i = wp.tid()
     if active[i] == 0:
         x[i] = inertia_target[i]
         return
-    d = inertia_target[i] - x_prev[i]
+    g2 = wp.dot(gravity, gravity)
+    guess = inertia_target[i]
+    pressed = float(0.0)
+    for p in range(body_lambda.shape[1]):
+        pressed = wp.max(pressed, body_lambda[i, p])
+    if g2 > 0.0 and pressed <= 0.0:
+        s = wp.clamp(wp.dot(v[i] - v_old[i], gravity) / (h * g2), 0.0, 1.0)
+        guess = guess - gravity * ((1.0 - s) * h * h)
+    d = guess - x_prev[i]
     L = wp.length(d)
     if L > bound[i]:
         d = d * (bound[i] / L)
@@ -146,64 +166,11 @@ def initial_guess(x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtyp
 
 
 @wp.kernel
-def body_friction(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
-                  active: wp.array(dtype=wp.int32), has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dtype=wp.vec3),
-                  body_disp: wp.array2d(dtype=wp.vec3), lam: wp.array2d(dtype=float), friction: wp.array(dtype=float),
-                  area: wp.array(dtype=float), max_pressure: float, x_det: wp.array(dtype=wp.vec3),
-                  bound: wp.array(dtype=float), h: float):
-    """Coulomb friction on the substep's result: a vertex the body pushes with normal force λ
-    loses up to μ λ h / m of its tangential velocity relative to the body over the substep (its
-    end position moves back along the slide; all of it when the slide is smaller: static),
-    relative to the body part that presses it hardest. (Friction with every part that touches it
-    glued cloth caught between arm and torso to both, and the arm dragged it on.) A vertex pinched
-    between two parts that press it from opposite sides gets none: it slides out of the pinch.
-
-    This acts on whatever moved the vertex in the solve, the forces the cloth passes on included:
-    the weight of a pair of pants hangs on its waistband through the membrane, and friction that
-    only acted on each vertex's own predicted velocity (``forward_step``) let them slide off the
-    hips. A friction force inside the vertex solve cannot do it: each vertex's Newton step
-    is held by its neighbours' membrane stiffness, a thousand times the friction's, so the cloth
-    slid as if frictionless (a patch on a 20° plane with μ = 0.5).
-
-    The normal force that friction sees is at most ``max_pressure`` x the vertex's area: a posed
-    skinned body overlaps itself where real skin would give way (arm and torso at the armpit), and
-    the penalty of cloth squeezed into such an overlap (50 N per vertex for 5 mm) pinned it while
-    the arm dragged its neighbours on: triangles there stretched past 100 %."""
-    i = wp.tid()
-    if active[i] == 0 or mass[i] <= 0.0:
-        return
-    best = int(-1)
-    big = float(0.0)
-    for p in range(has.shape[1]):
-        if has[i, p] == 1 and lam[i, p] > big:
-            big = lam[i, p]
-            best = p
-    if best < 0:
-        return
-    n = normal[i, best]
-    for p in range(has.shape[1]):
-        if p != best and has[i, p] == 1 and lam[i, p] > 0.0 and wp.dot(normal[i, p], n) < 0.0:
-            return  # pinched between two parts pressing from opposite sides: it slides out
-    rel = (x[i] - x_prev[i]) - body_disp[i, best]
-    t = rel - n * wp.dot(rel, n)
-    lt = wp.length(t)
-    allowed = friction[i] * wp.min(big, max_pressure * area[i]) * h * h / mass[i]  # the move friction can take back
-    xi = x[i] - t
-    if lt > allowed:
-        xi = x[i] - t * (allowed / lt)
-    # within the vertex's conservative bound like every other move (friction carried cloth in a
-    # fold with the body through the cloth beside it: T-shirts tangled, 1,700 crossings)
-    move = xi - x_det[i]
-    L = wp.length(move)
-    if L > bound[i]:
-        xi = x_det[i] + move * (bound[i] / L)
-    x[i] = xi
-
-
-@wp.kernel
 def update_velocity(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), h: float,
-                    v: wp.array(dtype=wp.vec3)):
+                    v: wp.array(dtype=wp.vec3), v_old: wp.array(dtype=wp.vec3)):
+    """The substep's velocity (x - x₀)/h; the one before it goes to ``v_old``."""
     i = wp.tid()
+    v_old[i] = v[i]
     v[i] = (x[i] - x_prev[i]) / h
 
 
@@ -537,9 +504,10 @@ def finish_bounds(min_dist: wp.array(dtype=float), fraction: float, floor: float
 @wp.func
 def membrane_force_hessian(i: int, local: int, f: int, x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                            faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                           tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4), damping: float,
-                           h: float):
-    """Force and Hessian block on corner ``local`` of face ``f`` (orthotropic StVK, see module doc)."""
+                           tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                           tri_lock: wp.array(dtype=wp.vec2), damping: float, h: float):
+    """Force and Hessian block on corner ``local`` of face ``f`` (orthotropic StVK and the lock,
+    see module doc)."""
     x0 = x[faces[f, 0]]
     x1 = x[faces[f, 1]]
     x2 = x[faces[f, 2]]
@@ -592,6 +560,49 @@ def membrane_force_hessian(i: int, local: int, f: int, x: wp.array(dtype=wp.vec3
     geo = c[0] * sc0 + c[1] * sc1
     if geo > 0.0:
         hess = hess + wp.identity(n=3, dtype=float) * (geo * A)
+    lk = tri_lock[f]
+    if lk[1] > 0.0:
+        fl, hl = lock_force_hessian(f0, f1, c, lk[0], lk[1] * A)
+        force += fl
+        hess += hl
+    return force, hess
+
+
+@wp.func
+def lock_force_hessian(f0: wp.vec3, f1: wp.vec3, c: wp.vec2, lam_lock: float, kA: float):
+    """Force and Hessian on one corner (shape weights ``c``) of the lock ``kA/2 Σ (λ - λ_lock)²``
+    over the triangle's principal stretches λ above ``λ_lock`` (F = [f0 f1]; the eigenvectors of
+    FᵀF held fixed: the Hessian is PSD)."""
+    a = wp.dot(f0, f0)
+    b = wp.dot(f1, f1)
+    cc = wp.dot(f0, f1)
+    mean = 0.5 * (a + b)
+    rad = wp.sqrt(0.25 * (a - b) * (a - b) + cc * cc)
+    force = wp.vec3(0.0)
+    hess = wp.mat33(0.0)
+    if mean + rad <= lam_lock * lam_lock:
+        return force, hess
+    # eigenvector of the larger eigenvalue of FᵀF = [[a, cc], [cc, b]]
+    v = wp.vec2(1.0, 0.0)
+    if rad > 1.0e-12:
+        if a >= b:
+            v = wp.normalize(wp.vec2(mean + rad - b, cc))
+        else:
+            v = wp.normalize(wp.vec2(cc, mean + rad - a))
+    for k in range(2):
+        mu = mean + rad
+        vk = v
+        if k == 1:
+            mu = mean - rad
+            vk = wp.vec2(-v[1], v[0])
+        lam = wp.sqrt(wp.max(mu, 0.0))
+        if lam > lam_lock:
+            w = f0 * vk[0] + f1 * vk[1]  # F v, of length λ
+            u = w / lam
+            vc = wp.dot(vk, c)
+            force -= u * (kA * (lam - lam_lock) * vc)
+            hess += wp.outer(u, u) * (kA * vc * vc) + (wp.identity(n=3, dtype=float) - wp.outer(u, u)) * (
+                kA * (lam - lam_lock) * vc * vc / lam)
     return force, hess
 
 
@@ -645,6 +656,90 @@ def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3)
     return force, hess
 
 
+@wp.func
+def friction_part(i: int, has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dtype=wp.vec3),
+                  lam: wp.array2d(dtype=float)) -> int:
+    """The body part whose friction acts on vertex i: the one that pressed it hardest at the end
+    of the last substep (λ lagged, as in IPC); -1 for none, and for a vertex pinched between two
+    parts that press it from opposite sides (it slides out of the pinch)."""
+    best = int(-1)
+    big = float(0.0)
+    for p in range(has.shape[1]):
+        if has[i, p] == 1 and lam[i, p] > big:
+            big = lam[i, p]
+            best = p
+    if best < 0:
+        return best
+    n = normal[i, best]
+    for p in range(has.shape[1]):
+        if p != best and has[i, p] == 1 and lam[i, p] > 0.0 and wp.dot(normal[i, p], n) < 0.0:
+            return -1
+    return best
+
+
+@wp.func
+def body_stick_slip(new: wp.vec3, x_prev: wp.vec3, hess: wp.mat33, n: wp.vec3, body_disp: wp.vec3, limit: float):
+    """Coulomb friction with the body on a vertex's Newton step to ``new``: its slide t relative
+    to the body (normal n, moved by ``body_disp`` over the substep) is taken back as far as a force
+    of ``limit`` holds it against the vertex's local stiffness t̂ᵀ H t̂ (H: the Hessian of its
+    inertia and the cloth around it, without the contacts, whose stiff normals would make any
+    slide look too stiff to take back): all of it (static) when the force that moved it is below
+    the limit.
+
+    Forces that reach a vertex through the cloth (the weight of a pair of pants on its waistband, a
+    membrane stretched over the shoulders) are resolved here, in the sweep, so Gauss-Seidel settles
+    stick and slip across the cloth; the slide the whole cloth shares at the start of a substep,
+    its own inertia and weight, is resolved before (``predict_body_friction``; ``limit`` is what
+    that left of μ λ). Friction applied after the solve with only the inertia m/h² as the stiffness
+    held cloth that its membrane pulled with a hundred times μ λ: a jersey T-shirt hung 40 %
+    stretched from its shoulders on a body at rest. As a smoothed force it could not hold: its
+    spring μ λ / ε is a thousandth of the membrane's."""
+    rel = (new - x_prev) - body_disp
+    t = rel - n * wp.dot(rel, n)
+    lt = wp.length(t)
+    if lt < 1.0e-12 or limit <= 0.0:
+        return new
+    th = t / lt
+    allowed = limit / wp.max(wp.dot(th, hess * th), 1.0e-12)
+    if lt <= allowed:
+        return new - t
+    return new - t * (allowed / lt)
+
+
+@wp.kernel
+def predict_body_friction(x_prev: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
+                          has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dtype=wp.vec3),
+                          body_disp: wp.array2d(dtype=wp.vec3), lam: wp.array2d(dtype=float),
+                          friction: wp.array(dtype=float), area: wp.array(dtype=float), max_pressure: float, h: float,
+                          y: wp.array(dtype=wp.vec3), used: wp.array(dtype=float)):
+    """Coulomb friction on each vertex's inertial prediction y (its velocity and weight over the
+    substep): the tangential slide relative to the body is cut by up to μ λ h²/m, and the force it
+    took (``used``) is not available to the sweeps' friction (``body_stick_slip``).
+
+    The normal force λ is at most ``max_pressure`` x the vertex's area: a posed skinned body
+    overlaps itself where real skin would give way (arm and torso at the armpit), and the penalty
+    of cloth squeezed into such an overlap (50 N per vertex for 5 mm) pinned it while the arm
+    dragged its neighbours on: triangles there stretched past 100 %."""
+    i = wp.tid()
+    used[i] = 0.0
+    if active[i] == 0 or mass[i] <= 0.0:
+        return
+    best = friction_part(i, has, normal, lam)
+    if best < 0:
+        return
+    n = normal[i, best]
+    rel = (y[i] - x_prev[i]) - body_disp[i, best]
+    t = rel - n * wp.dot(rel, n)
+    lt = wp.length(t)
+    if lt < 1.0e-12:
+        return
+    m_h2 = mass[i] / (h * h)
+    limit = friction[i] * wp.min(lam[i, best], max_pressure * area[i])
+    take = wp.min(lt, limit / m_h2)
+    y[i] = y[i] - t * (take / lt)
+    used[i] = take * m_h2
+
+
 @wp.kernel
 def solve_colour(
     colour_verts: wp.array(dtype=wp.int32),
@@ -661,6 +756,7 @@ def solve_colour(
     dm_inv: wp.array(dtype=wp.mat22),
     tri_area: wp.array(dtype=float),
     tri_stiff: wp.array(dtype=wp.vec4),
+    tri_lock: wp.array(dtype=wp.vec2),
     edges: wp.array2d(dtype=wp.int32),
     rest_angle: wp.array(dtype=float),
     bend_k: wp.array(dtype=float),
@@ -686,9 +782,14 @@ def solve_colour(
     self_friction: float,
     eps_u: float,
     h: float,
+    vertex_area: wp.array(dtype=float),
+    body_friction: int,
+    friction_pressure: float,
+    friction_used: wp.array(dtype=float),
     x_out: wp.array(dtype=wp.vec3),
 ):
-    """One Newton step on the local energy of every vertex of one colour (writes ``x_out``)."""
+    """One Newton step on the local energy of every vertex of one colour (writes ``x_out``), then
+    Coulomb friction with the body on that step (:func:`body_stick_slip`)."""
     tid = wp.tid()
     i = colour_verts[tid]
     xi = x[i]
@@ -701,10 +802,11 @@ def solve_colour(
     kd = damping[i]
     # membrane
     for k in range(v2f_offsets[i], v2f_offsets[i + 1]):
-        fm, hm = membrane_force_hessian(i, v2f[k, 1], v2f[k, 0], x, x_prev, faces, dm_inv, tri_area, tri_stiff, kd,
-                                        h)
+        fm, hm = membrane_force_hessian(i, v2f[k, 1], v2f[k, 0], x, x_prev, faces, dm_inv, tri_area, tri_stiff,
+                                        tri_lock, kd, h)
         force += fm
         hess += hm
+    hel = hess  # inertia, membrane and bending: the stiffness friction acts against
     # bending (every edge stencil the vertex belongs to) and edge-edge contacts
     for k in range(v2e_offsets[i], v2e_offsets[i + 1]):
         e = v2e[k, 0]
@@ -713,6 +815,7 @@ def solve_colour(
             fb, hb = bending_force_hessian(i, local, e, x, x_prev, edges, rest_angle, bend_k, kd, h)
             force += fb
             hess += hb
+            hel += hb
         if local < 2:
             a = edges[e, 0]
             b = edges[e, 1]
@@ -770,8 +873,8 @@ def solve_colour(
                 fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local], -1.0)
                 force += fc
                 hess += hc
-    # the body: one plane per part (normal only: friction with the body acts after the solve,
-    # body_friction)
+    # the body: one plane per part (the penalty along its normal; friction with the part that
+    # presses hardest projects the step afterwards)
     r = body_radius[i]
     for p in range(body_has.shape[1]):
         if body_has[i, p] == 1:
@@ -786,6 +889,11 @@ def solve_colour(
         return
     dx = wp.inverse(hess) * force
     new = xi + dx
+    if body_friction != 0:
+        best = friction_part(i, body_has, body_normal, body_lambda)
+        if best >= 0:
+            limit = friction[i] * wp.min(body_lambda[i, best], friction_pressure * vertex_area[i]) - friction_used[i]
+            new = body_stick_slip(new, x_prev[i], hel, body_normal[i, best], body_disp[i, best], limit)
     move = new - x_det[i]
     L = wp.length(move)
     if L > bound[i]:

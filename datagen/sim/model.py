@@ -45,6 +45,7 @@ class ClothModel:
             built shape, its weft row scaled by the face's ``weft_scale``).
         tri_area: rest area [m²] (the built area times ``weft_scale``; mass is the built area's).
         tri_stiff: (k_u, k_v, k_uv, k_s) [N/m] per triangle.
+        tri_lock: (1 + lock strain [-], lock stiffness [N/m]) per triangle (the material's lock).
         edges: [edge_count, 4]: hinge (0, 1) and opposite corners (2, 3; -1 on a boundary).
         rest_angle: rest dihedral angle [rad]; bend_k: 3 k_b |ē|²/(Ā₁+Ā₂) [N·m].
         colours: vertex ids per colour (no two vertices of one colour share a triangle or hinge).
@@ -166,6 +167,7 @@ class ClothModelBuilder:
         dm_inv = np.linalg.inv(Dm)  # F(x) = Ds Dm⁻¹ with Ds = [x1 - x0, x2 - x0]
         stiff = np.array([[m.stretch_weft, m.stretch_warp, m.poisson * np.sqrt(m.stretch_weft * m.stretch_warp), m.shear]
                           for m in mats])[fm]
+        lock = np.array([[1.0 + m.lock_strain, m.lock_ratio * max(m.stretch_weft, m.stretch_warp)] for m in mats])[fm]
         dens = np.array([m.density for m in mats])[fm]
         mass = np.zeros(len(X))
         varea = np.zeros(len(X))
@@ -199,7 +201,7 @@ class ClothModelBuilder:
         if pins:
             active[np.concatenate(pins)] = 0
         host.update(rest_positions=X, faces=F, particle_scene=scene, mass=mass, vertex_area=varea, dm_inv=dm_inv,
-                    tri_area=area * weft_scale, tri_stiff=stiff, rest_angle=rest_angle, bend_k=bend_k, active=active,
+                    tri_area=area * weft_scale, tri_stiff=stiff, tri_lock=lock, rest_angle=rest_angle, bend_k=bend_k, active=active,
                     damping=damping, friction=friction, thickness=thickness)
         scene_count = max(int(scene.max()), max(self._bodies, default=0)) + 1
         missing = sorted(set(range(scene_count)) - set(self._bodies))
@@ -239,7 +241,7 @@ class ClothModelBuilder:
             i32 = lambda a: wp.array(np.ascontiguousarray(a, dtype=np.int32))
             arr.update(rest_positions=f32(X, wp.vec3), mass=f32(mass), vertex_area=f32(varea), active=i32(active),
                        particle_scene=i32(scene), faces=i32(F), dm_inv=f32(dm_inv, wp.mat22), tri_area=f32(area),
-                       tri_stiff=f32(stiff, wp.vec4), edges=i32(E), rest_angle=f32(rest_angle), bend_k=f32(bend_k),
+                       tri_stiff=f32(stiff, wp.vec4), tri_lock=f32(lock, wp.vec2), edges=i32(E), rest_angle=f32(rest_angle), bend_k=f32(bend_k),
                        v2f_offsets=i32(host["v2f_offsets"]), v2f=i32(host["v2f"]),
                        v2e_offsets=i32(host["v2e_offsets"]), v2e=i32(host["v2e"]),
                        nbr_offsets=i32(host["nbr_offsets"]), nbr=i32(host["nbr"]), damping=f32(damping),

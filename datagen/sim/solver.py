@@ -54,17 +54,16 @@ class SolverConfig:
         detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
             substep); each detection renews the move bounds from the current positions, so cloth
             pressed between the body and other cloth can follow a fast body.
-        body_friction: Coulomb friction with the body (``kernels.body_friction``); off only to
+        body_friction: Coulomb friction with the body (``kernels.body_stick_slip``); off only to
             diagnose what it does.
         friction_pressure: the largest body contact pressure that friction sees [Pa] (its normal
             force per vertex is at most this x the vertex area). Where the skinned body overlaps
-            itself (the armpit) or tight cloth wraps a small radius, the penalty's normal force
-            grows with the cloth's own tension, and friction glued the cloth to skin that LBS
-            stretches and slides: with the cap at 2 kPa the six 300-frame runs all failed on
-            stretch (T-shirt walk: mean stretch 22 %); at 300 Pa the tiny T-shirt walk peaks at
-            69 %. The weight of a garment presses about 100 Pa on the shoulders, so gravity-loaded
-            contacts are not capped; an elastic waistband's grip is (about 1-2 kPa), and at 300 Pa
-            it still holds 0.3 x 300 Pa x its area, several times a pair of pants' weight.
+            itself (the armpit), the penalty's normal force on cloth squeezed into the overlap
+            grows without bound (50 N per vertex for 5 mm) and would pin it while the arm drags its
+            neighbours on. An elastic waistband presses about 1-3 kPa (clothing pressure above
+            4 kPa is felt as uncomfortable); the weight of a garment about 100 Pa. At 1 kPa the
+            pants on their waistband hold still; at 300 Pa they crept down 1.5 cm/s; at 3 kPa a
+            patch sliding down a 35° plane dug in its front edge and lifted 12 mm.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -91,7 +90,7 @@ class SolverConfig:
     body_projection: bool = True
     projection_reach: float = 0.1
     body_friction: bool = True
-    friction_pressure: float = 300.0
+    friction_pressure: float = 1000.0
     cuda_graph: bool = True
 
     def __post_init__(self):
@@ -131,6 +130,8 @@ class SolverVBD:
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
+            self.friction_used = wp.zeros(n, dtype=float)
+            self.v_old = z3(n)
             P = int(m.host["body_part_count"])
             self.body_lambda = wp.zeros((n, P), dtype=float)
             self.body_has = wp.zeros((n, P), dtype=wp.int32)
@@ -214,8 +215,19 @@ class SolverVBD:
 
         Contact buffers that overflow are grown and the step is redone, so no contact is dropped.
         """
+        import warp as wp
+
         if not dt > 0:
             raise InputError(f"time step must be > 0, got {dt}")
+        # what a step carries over from the last one besides the state (the body's normal forces,
+        # lagged for friction; the velocity before the last substep): a redo starts from it again,
+        # so a step redone after its buffers grew gives what a step with big enough buffers gives,
+        # and a scene does not depend on whether another scene of its batch overflowed
+        lagged = (self.body_lambda, self.v_old)
+        if self.config.self_collision:
+            saved = self.__dict__.setdefault("_lagged_saved", [wp.empty_like(a) for a in lagged])
+            for a, b in zip(lagged, saved):
+                wp.copy(b, a)
         for _attempt in range(6):
             if state_out is not state_in:
                 state_out.assign(state_in)
@@ -225,6 +237,8 @@ class SolverVBD:
                 return
             self.contact_growths += 1
             self._allocate_contacts(int(need * 1.5) + 1)
+            for a, b in zip(lagged, saved):
+                wp.copy(a, b)
             if state_out is state_in:
                 raise SimulationError("contact buffers overflowed in an in-place step; they have been grown: "
                                       "step with separate input and output states")
@@ -311,9 +325,15 @@ class SolverVBD:
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
                                                     self.body_radius, m.active, self.y, self.body_has, self.body_point,
                                                     self.body_normal, self.body_disp])
+                if c.body_friction:
+                    wp.launch(K.predict_body_friction, n, inputs=[
+                        self.x_prev, m.mass, m.active, self.body_has, self.body_normal, self.body_disp,
+                        self.body_lambda, m.friction, m.vertex_area, c.friction_pressure, h, self.y,
+                        self.friction_used])
                 wp.copy(self.x_det, self.x_prev)
                 self._detect_self()
-                wp.launch(K.initial_guess, n, inputs=[self.x_det, self.y, self.bound, m.active, x])
+                wp.launch(K.initial_guess, n, inputs=[self.x_det, self.y, v, self.v_old, wp.vec3(*c.gravity), h,
+                                                     self.body_lambda, self.bound, m.active, x])
                 wp.copy(self.x_nm1, x)
                 omega, cheb = 1.0, 0
                 rho = c.chebyshev_rho
@@ -326,12 +346,13 @@ class SolverVBD:
                     for col in m.colours:
                         wp.launch(K.solve_colour, col.shape[0], inputs=[
                             col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
-                            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.rest_angle, m.bend_k,
+                            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
                             m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
                             self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
                             self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
                             self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
-                            c.friction_velocity * h, h, self.x_tmp])
+                            c.friction_velocity * h, h, m.vertex_area, int(c.body_friction), c.friction_pressure,
+                            self.friction_used, self.x_tmp])
                         wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
                     omega = 1.0 if cheb < 1 else (2.0 / (2.0 - rho * rho) if cheb == 1 else 4.0 / (4.0 - rho * rho * omega))
                     cheb += 1
@@ -343,12 +364,7 @@ class SolverVBD:
                                                       omega])
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
                                                            self.body_radius, c.body_stiffness, self.body_lambda])
-                if c.body_friction:
-                    wp.launch(K.body_friction, n, inputs=[x, self.x_prev, m.mass, m.active, self.body_has,
-                                                          self.body_normal, self.body_disp, self.body_lambda,
-                                                          m.friction, m.vertex_area, c.friction_pressure,
-                                                          self.x_det, self.bound, h])
-                wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v])
+                wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v, self.v_old])
                 if c.body_projection:
                     for _ in range(2):  # a second pass for vertices the first put into another body part
                         wp.launch(K.project_out_of_body, n, inputs=[
