@@ -1,4 +1,4 @@
-"""Schema of drape's dataset store (version 2): every group and array of the packed zarr v3 store
+"""Schema of drape's dataset store (version 3): every group and array of the packed zarr v3 store
 with its symbolic shape, dtype, unit and meaning, the table whose rows its first axis runs over,
 and every required root attribute. ``datagen.store`` writes, reads and validates against this
 module and nothing else; ``docs/store.md`` explains it in prose.
@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-DATASET_SCHEMA_VERSION = 2
+DATASET_SCHEMA_VERSION = 3
 
 STORE_FORMAT = "drape-dataset"
 """Value of the root attribute ``format`` that marks a zarr group as a drape dataset store."""
@@ -338,7 +338,10 @@ ROOT_ATTRIBUTES: dict[str, AttributeSpec] = {
     "format": AttributeSpec(type="str", doc=f"always '{STORE_FORMAT}'"),
     "schema_version": AttributeSpec(type="int", doc="DATASET_SCHEMA_VERSION the store was written with"),
     "drape_version": AttributeSpec(type="str", doc="drape version that created the store"),
-    "config": AttributeSpec(type="dict", doc="the resolved dataset configuration (JSON)"),
+    "config": AttributeSpec(type="dict", doc="the resolved dataset configuration (JSON), without the settings that "
+                                             "only spread the work (simulation.batch_size)"),
+    "code_version": AttributeSpec(type="str", doc="digest of the code and library versions that made the samples "
+                                                  "(datagen.generate.identity.code_version; '' when not recorded)"),
     "seed": AttributeSpec(type="int", doc="the dataset seed"),
     "sample_count": AttributeSpec(type="int", doc="number of samples (n_samples)"),
     "segment_length": AttributeSpec(type="int", doc="frames per segment in index/segments"),
@@ -348,5 +351,6 @@ ROOT_ATTRIBUTES: dict[str, AttributeSpec] = {
 }
 """Required root attributes of a packed store."""
 
-IDENTITY_ATTRIBUTES = ("schema_version", "config", "seed", "sample_count", "segment_length", "failure_names")
+IDENTITY_ATTRIBUTES = ("schema_version", "config", "code_version", "seed", "sample_count", "segment_length",
+                       "failure_names")
 """Root attributes fixed when a store is created: reopening it with different values is refused."""

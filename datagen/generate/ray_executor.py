@@ -25,11 +25,13 @@ def _task(config_dict: dict, out: str, indices: list[int], device: str | None) -
     from datagen.config import load_config
     from datagen.generate.config import DatasetConfig
     from datagen.generate.run import Plan, simulate_samples
+    from datagen.generate.identity import code_version, identity_config
     from datagen.store import StoreWriter
 
     config = load_config(DatasetConfig, config_dict)
     plan = Plan(config)
-    writer = StoreWriter.open(out, config=config.as_dict(), seed=config.seed, sample_count=plan.sample_count,
+    writer = StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
+                              seed=config.seed, sample_count=plan.sample_count,
                               segment_length=config.segment_length)
     todo = writer.missing(indices)
     simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s))

@@ -269,10 +269,12 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
 def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local", device: str | None = None,
              workers: int = 2, progress=None) -> dict:
     """Make (or finish) the store ``out`` for ``config``; returns a summary dict."""
+    from datagen.generate.identity import code_version, identity_config
     from datagen.store import StoreWriter
 
     plan = Plan(config)
-    writer = StoreWriter.open(out, config=config.as_dict(), seed=config.seed, sample_count=plan.sample_count,
+    writer = StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
+                              seed=config.seed, sample_count=plan.sample_count,
                               segment_length=config.segment_length)
     if writer.is_complete:
         return {"samples": plan.sample_count, "simulated": 0, "seconds": 0.0, "complete": True}

@@ -26,7 +26,7 @@ def store_info(path: str | Path) -> dict[str, Any]:
     """Summary of the store at ``path``.
 
     Returns:
-        ``path``, ``complete``, ``schema_version``, ``drape_version``, ``seed``, ``sample_count``,
+        ``path``, ``complete``, ``schema_version``, ``drape_version``, ``code_version``, ``seed``, ``sample_count``,
         ``segment_length``; for a complete store ``splits`` (name -> samples, ok, failed, frames,
         sim_frames, vertex_rows, segments, garment_instances, bodies, motions), ``totals`` (the same
         over all samples), ``static`` (garment instances, bodies, motions, body vertices, fit features),
@@ -39,7 +39,7 @@ def store_info(path: str | Path) -> dict[str, Any]:
     if attrs is None or attrs.get("format") != STORE_FORMAT:
         raise InputError(f"{path} is not a drape dataset store (no zarr.json with format '{STORE_FORMAT}')")
     info: dict[str, Any] = {"path": str(path), "complete": attrs.get("complete") is True}
-    for key in ("schema_version", "drape_version", "seed", "sample_count", "segment_length"):
+    for key in ("schema_version", "drape_version", "code_version", "seed", "sample_count", "segment_length"):
         info[key] = attrs.get(key)
     failure_names = list(attrs.get("failure_names", []))
     if not info["complete"]:
@@ -135,7 +135,8 @@ def format_store_info(info: dict[str, Any]) -> str:
     """:func:`store_info` as a plain-text table."""
     state = "complete" if info["complete"] else "NOT PACKED (generation in progress or pack() interrupted)"
     lines = [f"store {info['path']}: {state}",
-             (f"schema {info['schema_version']}, drape {info['drape_version']}, seed {info['seed']}, "
+             (f"schema {info['schema_version']}, drape {info['drape_version']} (code {info['code_version'] or 'not recorded'}), "
+              f"seed {info['seed']}, "
               f"{info['sample_count']} samples, segments of {info['segment_length']} frames")]
     if not info["complete"]:
         lines.append(f"staged {info['staged']} samples, missing {info['missing']}; static groups staged: "

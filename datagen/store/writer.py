@@ -337,7 +337,7 @@ class StoreWriter:
     @classmethod
     def open(cls, path: str | Path, *, config: Mapping[str, Any], seed: int, sample_count: int,
              segment_length: int = SEGMENT_LENGTH, failure_names: Iterable[str] = FAILURE_NAMES,
-             durable: bool = True) -> StoreWriter:
+             code_version: str = "", durable: bool = True) -> StoreWriter:
         """Create the store at ``path``, or open the one there if it was made with the same arguments.
 
         Args:
@@ -347,12 +347,14 @@ class StoreWriter:
             sample_count: number of samples (scenes) the store will hold, indices 0 .. sample_count - 1.
             segment_length: frames per segment of ``index/segments``.
             failure_names: names of the failure codes, "ok" (code 0) first.
+            code_version: what made the samples (``datagen.generate.identity.code_version``); a store
+                is resumed only by the same ("" records none).
             durable: fsync staged files and directories (off only for throwaway stores).
 
         Raises:
             InputError: ``path`` is a file, a non-empty directory that is not a drape store, or a drape
-                store made with a different config, seed, sample count, segment length, failure names or
-                schema version (the message names what differs); nothing is changed.
+                store made with a different config, code version, seed, sample count, segment length,
+                failure names or schema version (the message names what differs); nothing is changed.
             StorageError: the directory cannot be created or written (nothing is left behind).
         """
         path = Path(path)
@@ -368,7 +370,10 @@ class StoreWriter:
         if not failure_names or failure_names[0] != "ok" or len(set(failure_names)) != len(failure_names) \
                 or not all(isinstance(s, str) for s in failure_names):
             raise InputError(f"failure_names must be distinct strings starting with 'ok' (code 0), got {failure_names}")
+        if not isinstance(code_version, str):
+            raise InputError(f"code_version must be a string, got {code_version!r}")
         identity = {"schema_version": DATASET_SCHEMA_VERSION, "config": to_json(dict(config), "config"),
+                    "code_version": code_version,
                     "seed": int(seed), "sample_count": int(sample_count), "segment_length": int(segment_length),
                     "failure_names": failure_names}
         if path.exists() and not path.is_dir():
@@ -401,8 +406,12 @@ class StoreWriter:
             else:
                 diffs += json_differences(attrs.get(key), identity[key], key)
         if diffs:
+            code = (" The code_version differs: the store was started by other code or libraries (drape's "
+                    "simulator, garments, bodies or targets, or warp, anny, torch, ...): finish it with the "
+                    "installation that started it." if any(d.startswith("code_version") for d in diffs) else "")
             raise InputError(f"store {path} was made with different settings: {'; '.join(diffs)}. Nothing was "
-                             f"changed. Give a new store path, or delete {path} to start over with these settings.")
+                             f"changed.{code} Give a new store path, or delete {path} to start over with these "
+                             "settings.")
 
     @staticmethod
     def _create(path: Path, identity: dict) -> None:

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from datagen.config import load_config
-from datagen.errors import ConfigError, InputError
+from datagen.errors import ConfigError, InputError, SimulationError
 from datagen.generate.config import PRESETS, DatasetConfig, resolve_config
 from datagen.generate.run import generate
 from datagen.store import open_store, validate
@@ -89,8 +89,18 @@ def test_tensorstore_reads_every_array(local_store):
 
 
 def test_finished_store_is_left_alone_and_other_config_refused(local_store):
+    """A finished store run again (with another batch size too: it only groups scenes for the
+    device) does nothing; another config is refused; the store records the config without the
+    batch size and the code version that made it."""
+    from datagen.generate.identity import code_version
+    from datagen.store.layout import read_root_attributes
+
     before = {p: p.stat().st_mtime_ns for p in local_store.rglob("*") if p.is_file()}
     assert generate(micro(), local_store)["simulated"] == 0
+    assert generate(micro(simulation={**MICRO["simulation"], "batch_size": 1}), local_store)["simulated"] == 0
+    attrs = read_root_attributes(local_store)
+    assert attrs["code_version"] == code_version() and len(code_version()) == 16
+    assert "batch_size" not in attrs["config"]["simulation"] and attrs["config"]["simulation"]["substeps"] == 3
     with pytest.raises(InputError, match="frames"):
         generate(micro(frames=7), local_store)
     after = {p: p.stat().st_mtime_ns for p in local_store.rglob("*") if p.is_file()}
@@ -128,6 +138,33 @@ def test_kill_and_resume_gives_the_same_store(local_store, tmp_path):
     assert 1 <= n_staged < 5 and summary["simulated"] == 5 - n_staged
     assert validate(out) == []
     assert_same_store(local_store, out)
+
+
+def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keeps_what_was_staged(tmp_path,
+                                                                                                   monkeypatch):
+    """One scene per batch; the device has room for the first batch only (its free memory is
+    patched to 1 MiB after that): the run stops with an error that gives the figures and names
+    simulation.batch_size, the first sample stays staged and the rest are missing, ready to resume."""
+    import datagen.sim.scene as sc
+    from datagen.generate.identity import code_version, identity_config
+    from datagen.store import StoreWriter
+
+    calls = []
+
+    def free(device):
+        calls.append(device)
+        return None if len(calls) == 1 else 2**20
+
+    monkeypatch.setattr(sc, "device_free_bytes", free)
+    config = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "batch_size": 1}})
+    out = tmp_path / "small-device.zarr"
+    with pytest.raises(SimulationError) as exc:
+        generate(config, out)
+    assert "needs about" in str(exc.value) and "MiB free" in str(exc.value)
+    assert "simulation.batch_size" in str(exc.value)
+    writer = StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
+                              seed=config.seed, sample_count=5, segment_length=config.segment_length)
+    assert len(writer.missing(range(5))) == 4 and not writer.is_complete
 
 
 def test_ray_executor_makes_the_same_store(local_store, tmp_path):

@@ -1,17 +1,18 @@
-"""``simulate`` (the batched scene runner) records every frame's own positions."""
+"""``simulate`` (the batched scene runner) records every frame's own positions, and refuses a batch
+too large for its device before allocating anything."""
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
+import datagen.sim.scene as sc
+from datagen.errors import SimulationError
 from datagen.sim.scene import RunConfig, SceneArrays, simulate
 
 
-def test_recorded_frames_are_copies_not_views_of_the_state_buffers():
-    """On the CPU warp's ``.numpy()`` is a view of the array: recording it would make every
-    frame alias one of the two ping-pong states. A falling cloth must have a lower mean height
-    in each recorded frame than in the one before."""
-    n = 6
+def falling_patch(n: int = 6, T: int = 8) -> SceneArrays:
+    """An n x n cotton patch 1 m above a small tetrahedron far below it (it falls freely)."""
     u = np.linspace(0.0, 0.2, n)
     gx, gz = np.meshgrid(u, u, indexing="ij")
     verts = np.stack([gx.ravel(), np.ones(n * n), gz.ravel()], axis=1)
@@ -21,12 +22,36 @@ def test_recorded_frames_are_copies_not_views_of_the_state_buffers():
     frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), (len(faces), 1, 1))
     body = np.array([[0.0, -10.0, 0.0], [0.1, -10.0, 0.0], [0.0, -10.0, 0.1], [0.0, -9.9, 0.0]])  # far below
     body_faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-    T = 8
-    scene = SceneArrays(garment_vertices=verts, garment_faces=faces, material="cotton", material_frames=frames,
-                        weft_scale=np.ones(len(faces)),
-                        body_frames=np.repeat(body[None], T, 0), body_faces=body_faces, fps=30.0, lead_frames=0)
+    return SceneArrays(garment_vertices=verts, garment_faces=faces, material="cotton", material_frames=frames,
+                       weft_scale=np.ones(len(faces)),
+                       body_frames=np.repeat(body[None], T, 0), body_faces=body_faces, fps=30.0, lead_frames=0)
+
+
+def test_recorded_frames_are_copies_not_views_of_the_state_buffers():
+    """On the CPU warp's ``.numpy()`` is a view of the array: recording it would make every
+    frame alias one of the two ping-pong states. A falling cloth must have a lower mean height
+    in each recorded frame than in the one before."""
+    scene = falling_patch()
     config = RunConfig(settle_rest=1, lead_in=0.0, settle_pose=0, ramp=0.0)
     (result,) = simulate([scene], config, device="cpu")
     heights = result.positions[..., 1].mean(axis=1)
     assert len(heights) >= 5
     assert np.all(np.diff(heights) < -1e-4), heights
+
+
+def test_a_batch_too_large_for_the_device_is_refused_before_anything_is_allocated(monkeypatch):
+    """The batch's memory is estimated from its garment and body vertices and compared with what
+    the device has free; a batch that does not fit is refused with both figures and what to do,
+    before the model is built (here the device is told to have 1 MiB free)."""
+    scenes = [falling_patch(), falling_patch(n=20)]
+    need = sc.check_device_memory(scenes, "cpu")
+    assert need == (36 + 400) * sc.BYTES_PER_GARMENT_VERTEX + 2 * 4 * sc.BYTES_PER_BODY_VERTEX
+    monkeypatch.setattr(sc, "device_free_bytes", lambda device: 2**20)
+    built = []
+    monkeypatch.setattr(sc.ClothModelBuilder, "finalize", lambda *a, **k: built.append(1))
+    with pytest.raises(SimulationError) as exc:
+        simulate(scenes, RunConfig(settle_rest=1, lead_in=0.0, settle_pose=0, ramp=0.0), device="cpu")
+    msg = str(exc.value)
+    assert "a batch of 2 scenes (largest garment 400 vertices) needs about 2 MiB" in msg and "1 MiB free" in msg
+    assert "simulation.batch_size" in msg and "garment_edge_length" in msg
+    assert built == []

@@ -295,6 +295,12 @@ def test_config_change_and_foreign_directory_are_refused(tmp_path):
     assert f"seed (stored {sl.SEED}, given {sl.SEED + 1})" in msg and "Nothing was changed" in msg
     with pytest.raises(InputError, match=r"sample_count \(stored 12, given 13\)"):
         sl.open_writer(path, N + 1)
+    # the same settings from other code: a store never mixes samples of two simulator versions
+    with pytest.raises(InputError) as exc:
+        StoreWriter.open(path, config=sl.CONFIG, seed=sl.SEED, sample_count=N, segment_length=sl.SEGMENT_LENGTH,
+                         code_version="0123456789abcdef")
+    assert 'code_version (stored "", given "0123456789abcdef")' in str(exc.value)
+    assert "finish it with the installation that started it" in str(exc.value)
     assert snapshot(path) == before
     foreign = tmp_path / "photos"
     foreign.mkdir()
