@@ -250,6 +250,13 @@ def device_free_bytes(device: str | None) -> int | None:
     dev = wp.get_device(device)
     if dev.is_cuda:
         return int(dev.free_memory)
+    try:  # Linux: what can be had without swapping (page cache that can be dropped included)
+        with open("/proc/meminfo") as fh:
+            for line in fh:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
     try:
         return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
     except (ValueError, OSError, AttributeError):
