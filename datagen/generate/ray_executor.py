@@ -24,15 +24,10 @@ def _import_ray():
 def _task(config_dict: dict, out: str, indices: list[int], device: str | None) -> list[int]:
     from datagen.config import load_config
     from datagen.generate.config import DatasetConfig
-    from datagen.generate.run import Plan, simulate_samples
-    from datagen.generate.identity import code_version, identity_config
-    from datagen.store import StoreWriter
+    from datagen.generate.run import Plan, open_writer, simulate_samples
 
-    config = load_config(DatasetConfig, config_dict)
-    plan = Plan(config)
-    writer = StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
-                              seed=config.seed, sample_count=plan.sample_count,
-                              segment_length=config.segment_length)
+    plan = Plan(load_config(DatasetConfig, config_dict))
+    writer = open_writer(plan, out)
     todo = writer.missing(indices)
     simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s))
     return todo

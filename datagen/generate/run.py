@@ -266,16 +266,22 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
 # ------------------------------------------------------------------------------------------ main
 
 
-def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local", device: str | None = None,
-             workers: int = 2, progress=None) -> dict:
-    """Make (or finish) the store ``out`` for ``config``; returns a summary dict."""
+def open_writer(plan: Plan, out: str | Path):
+    """The store ``out`` for ``plan`` (created, or reopened when its identity matches: the config
+    without execution-only fields, the code version, seed, sample count and segment length)."""
     from datagen.generate.identity import code_version, identity_config
     from datagen.store import StoreWriter
 
+    config = plan.config
+    return StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
+                            seed=config.seed, sample_count=plan.sample_count, segment_length=config.segment_length)
+
+
+def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local", device: str | None = None,
+             workers: int = 2, progress=None) -> dict:
+    """Make (or finish) the store ``out`` for ``config``; returns a summary dict."""
     plan = Plan(config)
-    writer = StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
-                              seed=config.seed, sample_count=plan.sample_count,
-                              segment_length=config.segment_length)
+    writer = open_writer(plan, out)
     if writer.is_complete:
         return {"samples": plan.sample_count, "simulated": 0, "seconds": 0.0, "complete": True}
     t0 = time.perf_counter()

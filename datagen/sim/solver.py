@@ -134,6 +134,8 @@ class SolverVBD:
             self.v_old = z3(n)
             P = int(m.host["body_part_count"])
             self.body_lambda = wp.zeros((n, P), dtype=float)
+            # copies of what a step carries over from the last besides the state, for a redo
+            self._lagged_saved = (wp.zeros((n, P), dtype=float), z3(n))
             self.body_has = wp.zeros((n, P), dtype=wp.int32)
             self.body_point, self.body_normal, self.body_disp = (wp.zeros((n, P), dtype=wp.vec3) for _ in range(3))
             self.body_radius = wp.array(m.host["thickness"].astype(np.float32) + self.config.body_margin, dtype=float)
@@ -224,9 +226,8 @@ class SolverVBD:
         # so a step redone after its buffers grew gives what a step with big enough buffers gives,
         # and a scene does not depend on whether another scene of its batch overflowed
         lagged = (self.body_lambda, self.v_old)
-        if self.config.self_collision:
-            saved = self.__dict__.setdefault("_lagged_saved", [wp.empty_like(a) for a in lagged])
-            for a, b in zip(lagged, saved):
+        if self.config.self_collision:  # only cloth-cloth contact lists can overflow
+            for a, b in zip(lagged, self._lagged_saved):
                 wp.copy(b, a)
         for _attempt in range(6):
             if state_out is not state_in:
@@ -237,7 +238,7 @@ class SolverVBD:
                 return
             self.contact_growths += 1
             self._allocate_contacts(int(need * 1.5) + 1)
-            for a, b in zip(lagged, saved):
+            for a, b in zip(lagged, self._lagged_saved):
                 wp.copy(a, b)
             if state_out is state_in:
                 raise SimulationError("contact buffers overflowed in an in-place step; they have been grown: "

@@ -146,8 +146,7 @@ def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keep
     patched to 1 MiB after that): the run stops with an error that gives the figures and names
     simulation.batch_size, the first sample stays staged and the rest are missing, ready to resume."""
     import datagen.sim.scene as sc
-    from datagen.generate.identity import code_version, identity_config
-    from datagen.store import StoreWriter
+    from datagen.generate.run import Plan, open_writer
 
     calls = []
 
@@ -162,8 +161,7 @@ def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keep
         generate(config, out)
     assert "needs about" in str(exc.value) and "MiB free" in str(exc.value)
     assert "simulation.batch_size" in str(exc.value)
-    writer = StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
-                              seed=config.seed, sample_count=5, segment_length=config.segment_length)
+    writer = open_writer(Plan(config), out)
     assert len(writer.missing(range(5))) == 4 and not writer.is_complete
 
 
