@@ -51,7 +51,9 @@ def self_intersections(vertices: np.ndarray, faces: np.ndarray) -> int:
 
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices), np.ascontiguousarray(faces, dtype=np.int32)))
-    ms.compute_selection_by_self_intersections_per_face()
+    from datagen.garment.levelset import apply_meshlab_filter
+
+    apply_meshlab_filter(ms, "compute_selection_by_self_intersections_per_face")
     return int(ms.current_mesh().selected_face_number())
 
 

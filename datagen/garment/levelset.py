@@ -14,7 +14,26 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["body_sdf", "collapse_short_edges", "cut_mesh", "extract_surface", "largest_component", "remesh", "smin"]
+__all__ = ["apply_meshlab_filter", "body_sdf", "collapse_short_edges", "cut_mesh", "extract_surface",
+           "largest_component", "remesh", "smin"]
+
+
+def apply_meshlab_filter(ms, name: str, **params) -> None:
+    """Run the pymeshlab filter ``name`` on ``ms`` with every one of its parameters given.
+
+    A parameter left to pymeshlab's default is not safe: the default of ``checksurfdist`` in
+    isotropic explicit remeshing (pymeshlab 2025.7) is read from uninitialised memory, so the same
+    input remeshed to 935 vertices with pymeshlab imported from one directory and to 1,104 from
+    another. A filter whose parameter is missing here is refused, so a pymeshlab release that adds
+    one fails loudly instead of changing the garments.
+    """
+    wanted = set(ms.filter_parameter_values(name))
+    missing, unknown = sorted(wanted - set(params)), sorted(set(params) - wanted)
+    if missing or unknown:
+        raise RuntimeError(f"pymeshlab filter {name}: parameter(s) {missing} not given and {unknown} not known to "
+                           "this pymeshlab; every parameter is passed explicitly (its defaults are not reliable): "
+                           "update the call in datagen/garment/levelset.py for this pymeshlab version")
+    getattr(ms, name)(**params)
 
 
 def _warp():
@@ -176,7 +195,8 @@ def close_small_holes(vertices: np.ndarray, faces: np.ndarray, max_edges: int) -
 
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32)))
-    ms.meshing_close_holes(maxholesize=int(max_edges), selfintersection=False)
+    apply_meshlab_filter(ms, "meshing_close_holes", maxholesize=int(max_edges), selected=False, newfaceselected=False,
+                         selfintersection=False, refinehole=False, refineholeedgelen=pymeshlab.PercentageValue(3.0))
     m = ms.current_mesh()
     return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)
 
@@ -188,7 +208,7 @@ def split_pinched_vertices(vertices: np.ndarray, faces: np.ndarray) -> tuple[np.
 
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32)))
-    ms.meshing_repair_non_manifold_vertices(vertdispratio=0.1)
+    apply_meshlab_filter(ms, "meshing_repair_non_manifold_vertices", vertdispratio=0.1)
     m = ms.current_mesh()
     return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)
 
@@ -199,9 +219,11 @@ def remesh(vertices: np.ndarray, faces: np.ndarray, edge_length: float, iteratio
 
     ms = pymeshlab.MeshSet()
     ms.add_mesh(pymeshlab.Mesh(np.ascontiguousarray(vertices, dtype=np.float64), np.ascontiguousarray(faces, dtype=np.int32)))
-    ms.meshing_isotropic_explicit_remeshing(iterations=iterations, targetlen=pymeshlab.PureValue(edge_length),
-                                            featuredeg=180.0, maxsurfdist=pymeshlab.PureValue(edge_length * 0.1))
-    ms.meshing_remove_unreferenced_vertices()
+    apply_meshlab_filter(ms, "meshing_isotropic_explicit_remeshing", iterations=iterations, adaptive=False,
+                         selectedonly=False, targetlen=pymeshlab.PureValue(edge_length), featuredeg=180.0,
+                         checksurfdist=True, maxsurfdist=pymeshlab.PureValue(edge_length * 0.1), splitflag=True,
+                         collapseflag=True, swapflag=True, smoothflag=True, reprojectflag=True)
+    apply_meshlab_filter(ms, "meshing_remove_unreferenced_vertices")
     m = ms.current_mesh()
     return np.asarray(m.vertex_matrix(), dtype=np.float64), np.asarray(m.face_matrix(), dtype=np.int64)
 

@@ -35,7 +35,7 @@ at the shoulder joints' height."""
 MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
-BUILDER_VERSION = 6
+BUILDER_VERSION = 7
 
 
 _TOP = {
