@@ -58,7 +58,8 @@ def run(args) -> None:
     print(f"{'batch':>5} {'self':>5} {'graph':>5} {'ms/frame':>9} {'garment-frames/s':>17} {'MB/scene':>9} {'pen':>5} {'self-x':>6} "
           f"{'stretch':>8}")
     graph_modes = {"on": True, "off": False}
-    for self_col, graph, n in [(sc, graph_modes[g], int(b)) for sc in (True, False) for g in args.cuda_graph.split(",")
+    for self_col, graph, n in [(sc, graph_modes[g], int(b)) for sc in [x == "on" for x in args.self.split(",")]
+                               for g in args.cuda_graph.split(",")
                                for b in args.batches.split(",")]:
         b = ClothModelBuilder()
         for s in range(n):
@@ -174,6 +175,7 @@ def main() -> None:
     p.add_argument("--batches", default="1")
     p.add_argument("--frames", type=int, default=30, help="timed frames (after two warm-up frames)")
     p.add_argument("--cuda-graph", default="on", help="on, off or on,off: replay each step as a CUDA graph (CUDA only)")
+    p.add_argument("--self", default="on,off", help="self-collision settings to run: on, off or on,off")
     p.set_defaults(func=run)
     p = sub.add_parser("prepare-runs", help="scenes for the long-run check (garments x motions)")
     p.add_argument("--out", default="sim_runs.pkl")

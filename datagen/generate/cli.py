@@ -71,7 +71,12 @@ def _cmd_generate(args) -> int:
     info = store_info(args.out)
     print(format_store_info(info))
     frames = info["totals"]["frames"]
-    if summary["seconds"] > 0:
+    if summary["seconds"] > 0 and summary["simulated"] < summary["samples"]:
+        # a resumed run: the stored frames include scenes an earlier run simulated, so a rate over
+        # this run's time would be wrong (a run that only packed read 174 garment-frames/s)
+        print(f"simulated {summary['simulated']} of {summary['samples']} scenes in {summary['seconds']:.0f} s (the "
+              f"others were staged by an earlier run, so no end-to-end rate is given); {frames} garment-frames stored")
+    elif summary["seconds"] > 0:
         print(f"simulated {summary['simulated']} scenes in {summary['seconds']:.0f} s; {frames} garment-frames stored, "
               f"{frames / summary['seconds']:.2f} garment-frames/s end to end")
     problems = validate(args.out)
