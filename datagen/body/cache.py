@@ -9,12 +9,17 @@ leaves a file that looks whole.
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 import time
+from dataclasses import asdict
 from pathlib import Path
 
-from datagen.body.anny_builder import AnnyBodyConfig, anny_version, build_body_from_anny
+import numpy as np
+
+from datagen.body.anny_builder import BUILDER_VERSION, AnnyBodyConfig, anny_version, build_body_from_anny
+from datagen.errors import InputError
 from datagen.body.io import load_body_file, save_body_file
 from datagen.body.model import BodyModel
 
@@ -37,6 +42,8 @@ def default_body(config: AnnyBodyConfig = AnnyBodyConfig(), *, subdivision_level
     ``subdivision_level`` 1 gives the 4-to-1 subdivided model (built from the cached base).
     """
     path = body_cache_path(config, subdivision_level)
+    if not path.is_file() and not rebuild and anny_version() == "unknown":
+        path = _built_elsewhere(config, path)
     if path.is_file() and not rebuild:
         t0 = time.perf_counter()
         model = load_body_file(path)
@@ -54,3 +61,27 @@ def default_body(config: AnnyBodyConfig = AnnyBodyConfig(), *, subdivision_level
     # keys, their meshes, the datasets made from them) then depended on whether the body cache was
     # warm (tiny from nothing: 4,740 garment vertices; with the body cached: 4,743)
     return load_body_file(path)
+
+
+def _built_elsewhere(config: AnnyBodyConfig, path: Path) -> Path:
+    """Where anny is not installed (a GPU host given a cache made elsewhere), the cached body built
+    from ``config`` by this builder version with whichever anny version built it; ``path`` itself
+    when there is none (the build then says that anny is needed). Two such bodies built by
+    different anny versions are refused: which one the data came from would be a guess."""
+    found = []
+    for candidate in sorted((cache_root() / "body").glob(f"anny-*/{path.name}")):
+        try:
+            with np.load(candidate, allow_pickle=False) as z:
+                meta = json.loads(str(z["drape_meta"]))
+        except (OSError, KeyError, ValueError):
+            continue
+        if meta.get("config") == json.loads(json.dumps(asdict(config))) and meta.get("builder_version") == BUILDER_VERSION:
+            found.append((candidate, meta.get("source", "an unknown Anny")))
+    if len(found) > 1:
+        raise InputError(f"anny is not installed here, and the body cache holds {len(found)} bodies built from this "
+                         f"config by different Anny versions ({', '.join(str(c) for c, _ in found)}): install the anny "
+                         "that made the data you want to match, or keep only that body in the cache")
+    if found:
+        logger.info("anny is not installed here: using the cached body %s (%s)", found[0][0], found[0][1])
+        return found[0][0]
+    return path
