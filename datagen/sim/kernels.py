@@ -87,18 +87,15 @@ def are_neighbours(a: int, b: int, nbr_offsets: wp.array(dtype=wp.int32), nbr: w
 
 @wp.func
 def contact_force_hessian(dx_rel: wp.vec3, n: wp.vec3, depth: float, k: float, mu: float, eps_u: float,
-                          weight: float, lam_friction: float):
+                          weight: float):
     """Force and Hessian on one vertex of a penalty contact ``k/2 depth²`` along n with Coulomb
-    friction ``mu * lam_friction`` (the normal force lagged from the end of the last substep;
-    negative: the current penalty force); ``weight`` is the vertex's share (barycentric weight)."""
+    friction ``mu`` times the current penalty force; ``weight`` is the vertex's share (barycentric
+    weight). (Body friction is not here: it is ``body_stick_slip``'s, with the lagged normal force.)"""
     lam = k * depth
     f = n * (lam * weight)
     h = wp.outer(n, n) * (k * weight * weight)
-    lam_f = lam
-    if lam_friction >= 0.0:
-        lam_f = lam_friction
-    if mu > 0.0 and lam_f > 0.0:
-        ff, hf = friction_force_hessian(dx_rel, n, mu * lam_f * wp.abs(weight), eps_u)
+    if mu > 0.0 and lam > 0.0:
+        ff, hf = friction_force_hessian(dx_rel, n, mu * lam * wp.abs(weight), eps_u)
         f = f + ff
         h = h + hf
     return f, h
@@ -836,7 +833,7 @@ def solve_colour(
                         we = es
                     rel = ((x[a] - x_prev[a]) * (1.0 - es) + (x[b] - x_prev[b]) * es) - (
                         (x[c] - x_prev[c]) * (1.0 - et) + (x[d] - x_prev[d]) * et)
-                    fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, we, -1.0)
+                    fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, we)
                     force += fc
                     hess += hc
     # vertex-triangle contacts with i as the vertex
@@ -851,7 +848,7 @@ def solve_colour(
         if dist < self_radius and dist > 1.0e-9:
             n = (xi - p) / dist
             rel = (xi - x_prev[i]) - ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2])
-            fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, 1.0, -1.0)
+            fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, 1.0)
             force += fc
             hess += hc
     # vertex-triangle contacts with i as a corner of the triangle
@@ -870,7 +867,7 @@ def solve_colour(
                 n = (p - x[j]) / dist
                 rel = ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2]) - (
                     x[j] - x_prev[j])
-                fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local], -1.0)
+                fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local])
                 force += fc
                 hess += hc
     # the body: one plane per part (the penalty along its normal; friction with the part that
@@ -881,7 +878,7 @@ def solve_colour(
             n = body_normal[i, p]
             dist = wp.dot(xi - body_point[i, p], n)
             if dist < r:
-                fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0, -1.0)
+                fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0)
                 force += fc
                 hess += hc
     if wp.abs(wp.determinant(hess)) < 1.0e-20:
