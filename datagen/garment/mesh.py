@@ -189,8 +189,9 @@ def _name_loops(v: np.ndarray, loops: list[np.ndarray], kind: str | None = None)
     Openings off the midline (centre more than 6 cm from it) are ``left_``/``right_`` plus
     ``cuff`` (sleeved tops), ``armhole`` (tank top, dress) or ``hem`` (pants, shorts). Of the
     openings on the midline the highest is ``neck`` (tops) or ``waist`` (skirts, pants, shorts)
-    and the lowest ``hem``; jackets and coats have one midline opening, the neckline, the open
-    front and the hem together: ``neck_front_hem``. Garments of other origins (files) get
+    and the lowest ``hem`` (the ``neck`` of jackets and coats runs down the open front to the top
+    button); a jacket or coat with one midline opening (the front open down to the hem, garment
+    builder 7 and older) has ``neck_front_hem``. Garments of other origins (files) get
     ``top_opening``, ``hem``, ``left_opening``, ``right_opening`` and ``opening`` by position.
     """
     if not loops:

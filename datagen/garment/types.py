@@ -35,7 +35,7 @@ at the shoulder joints' height."""
 MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
-BUILDER_VERSION = 7
+BUILDER_VERSION = 8
 
 
 _TOP = {
@@ -70,8 +70,10 @@ GARMENT_TYPES: dict[str, dict] = {
                           "ease_waist": ParamSpec(0.04, 0.08, "clearance at the waist (m)"),
                           "ease_hip": ParamSpec(0.035, 0.07, "clearance at the hips (m)"),
                           "sleeve_length": ParamSpec(0.4, 0.47, "sleeve from the shoulder joint (m)"),
-                          "opening": ParamSpec(0.04, 0.12, "width of the open front (m)")},
-               "material": "denim", "loops": 3},
+                          "opening": ParamSpec(0.04, 0.12, "width of the open front (m)"),
+                          "lapel_depth": ParamSpec(0.12, 0.22, "open front from the front neckline down to the "
+                                                               "top button (m); closed below it")},
+               "material": "denim", "loops": 4},
     "coat": {"params": {**_TOP, **_SLEEVE, **_SKIRT,
                         "ease_chest": ParamSpec(0.04, 0.07, "clearance at the chest (m)"),
                         "ease_waist": ParamSpec(0.045, 0.08, "clearance at the waist (m)"),
@@ -79,8 +81,10 @@ GARMENT_TYPES: dict[str, dict] = {
                         "sleeve_length": ParamSpec(0.28, 0.36, "3/4 sleeve from the shoulder joint (m)"),
                         "hem": ParamSpec(0.35, 0.5, "hem below the hip joints (m), about the knee"),
                         "flare": ParamSpec(0.05, 0.2, "widening per metre below the hips"),
-                        "opening": ParamSpec(0.04, 0.12, "width of the open front (m)")},
-             "material": "wool", "loops": 3},
+                        "opening": ParamSpec(0.04, 0.12, "width of the open front (m)"),
+                        "lapel_depth": ParamSpec(0.12, 0.22, "open front from the front neckline down to the top "
+                                                             "button (m); closed below it")},
+             "material": "wool", "loops": 4},
     "dress": {"params": {**_TOP, **_SKIRT,
                          "armhole_drop": ParamSpec(0.02, 0.06, "armhole below the armpit line (m)"),
                          "hem": ParamSpec(0.25, 0.5, "hem below the hip joints (m)")},
@@ -417,9 +421,13 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
                 cuts.append(np.maximum((sh[0] - 0.02) - np.abs(x), armpit - y))
             if "opening" in p:
                 # at least 2 grid steps either side of the mid-plane: a narrower slot is not
-                # resolved by marching cubes everywhere and a bridge of cloth closes the front
+                # resolved by marching cubes everywhere and a bridge of cloth closes the front.
+                # The front is open from the neckline down to the top button and closed below:
+                # a front open down to the hem slid off the shoulders of a walking body (the
+                # neckline spread and slid down the back; only a friction of 1.0 held it)
                 half = max(p["opening"] / 2, 2.0 * spacing)
-                cuts.append(np.maximum(np.abs(x) - half, (hzc + 0.02) - z))
+                button_y = neck[1] - 0.035 - p["neck_drop"] - p["neck_depth"] - p["lapel_depth"]
+                cuts.append(np.maximum.reduce([np.abs(x) - half, (hzc + 0.02) - z, button_y - y]))
         else:
             cuts.append((waist_y - p["waist"]) - y)
         return np.minimum.reduce(cuts)

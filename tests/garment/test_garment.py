@@ -15,7 +15,7 @@ from datagen.garment.types import GARMENT_TYPES, garment_params, make_garment
 LOOP_NAMES = {
     "tshirt": "neck hem left_cuff right_cuff", "long_sleeve_shirt": "neck hem left_cuff right_cuff",
     "tank_top": "neck hem left_armhole right_armhole", "dress": "neck hem left_armhole right_armhole",
-    "jacket": "neck_front_hem left_cuff right_cuff", "coat": "neck_front_hem left_cuff right_cuff",
+    "jacket": "neck hem left_cuff right_cuff", "coat": "neck hem left_cuff right_cuff",
     "skirt": "waist hem", "flared_skirt": "waist hem", "pants": "waist left_hem right_hem", "shorts": "waist left_hem right_hem",
 }
 
