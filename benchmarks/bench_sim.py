@@ -57,8 +57,8 @@ def run(args) -> None:
           f"{SolverConfig().iterations} iterations")
     print(f"{'batch':>5} {'self':>5} {'graph':>5} {'ms/frame':>9} {'garment-frames/s':>17} {'MB/scene':>9} {'pen':>5} {'self-x':>6} "
           f"{'stretch':>8}")
-    graph_modes = {"on": True, "off": False}
-    for self_col, graph, n in [(sc, graph_modes[g], int(b)) for sc in [x == "on" for x in args.self.split(",")]
+    on_off = {"on": True, "off": False}  # a value other than on or off fails here (KeyError)
+    for self_col, graph, n in [(on_off[sc], on_off[g], int(b)) for sc in args.self.split(",")
                                for g in args.cuda_graph.split(",")
                                for b in args.batches.split(",")]:
         b = ClothModelBuilder()

