@@ -26,7 +26,7 @@ from datagen.body.cache import default_body
 from datagen.motion.labels import LABELS
 from datagen.motion.library import default_rig, make_motion
 from datagen.motion.quality import BodyProbe, measure_motion
-from datagen.motion.rotations import axis_angle_to_matrix_np, matrix_to_rotation_6d_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np, matrix_to_rotation_6d_np
 
 
 def window_features(motion, window: int = 15, hop: int = 5) -> np.ndarray:

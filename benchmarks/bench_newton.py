@@ -150,7 +150,7 @@ def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure
     import newton
     import warp as wp
 
-    from datagen.garment.materials import material
+    from datagen.materials import material
     from datagen.sim.solver import SolverConfig
 
     cfg = SolverConfig()

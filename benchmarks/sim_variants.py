@@ -21,7 +21,7 @@ import sys
 import time
 
 import numpy as np
-from datagen.garment.materials import material
+from datagen.materials import material
 from datagen.garment.types import WAISTBAND_GRIP
 from datagen.sim.scene import RunConfig, scene_arrays, simulate
 from datagen.sim.solver import SolverConfig

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 import torch
 
-from datagen.motion.rotations import axis_angle_to_matrix, axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix, axis_angle_to_matrix_np
 
 
 # ----------------------------------------------------------------------------- numpy

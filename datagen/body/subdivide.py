@@ -17,10 +17,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.body.model import BodyModel
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:  # the model calls this module (BodyModel.subdivided); this one builds its class
+    from datagen.body.model import BodyModel
 
 
-def subdivide_body(model: BodyModel) -> BodyModel:
+def subdivide_body(model: "BodyModel") -> "BodyModel":
     """The model subdivided once (see the module docstring)."""
     from trimesh.remesh import subdivide
 
@@ -44,7 +47,7 @@ def subdivide_body(model: BodyModel) -> BodyModel:
     meta = dict(model.meta)
     meta["subdivision_level"] = int(meta.get("subdivision_level", 0)) + 1
     meta.pop("anny_vertex_index", None)
-    return BodyModel(
+    return type(model)(
         v_template=verts,
         shapedirs=new["shapedirs"].reshape(V2, 3, S),
         posedirs=posedirs,
@@ -62,7 +65,7 @@ def unique_edge_count(faces: np.ndarray) -> int:
     return int(len(np.unique(e, axis=0)))
 
 
-def subdivision_posing_error(model: BodyModel, betas: np.ndarray, pose: np.ndarray) -> np.ndarray:
+def subdivision_posing_error(model: "BodyModel", betas: np.ndarray, pose: np.ndarray) -> np.ndarray:
     """Per-vertex distance [B, V'] between posing the subdivided model and subdividing the posed
     mesh (midpoints of the posed coarse vertices), in metres."""
     from trimesh.remesh import subdivide

@@ -31,7 +31,7 @@ import numpy as np
 from datagen.body.render import VIEWS, MeshLayer, pyplot, shade_polygons, view_rotation
 from datagen.errors import InputError, MissingDependencyError
 from datagen.export.animation import Animation, quiet_warp
-from datagen.export.files import atomic_output, check_output_path
+from datagen.files import atomic_output, check_output_path
 from datagen.export.usd import GARMENT_COLOR, REGION_COLORS
 
 __all__ = ["CLIP_SUFFIXES", "COLOR_BY", "IMAGE_SUFFIXES", "body_distance", "parse_size", "parse_view",

@@ -25,7 +25,7 @@ codes ``0`` and ``T - 1``, ``upAxis = Y``, ``metersPerUnit = 1``. Points are flo
 written as given, so reading them back gives the input's float32 values exactly.
 
 :func:`new_stage` and :func:`save_stage` set up and write every drape USD layer (the motion
-exporter of :mod:`datagen.motion.export` uses them too); :func:`usd_validation_errors` runs
+exporter of :mod:`datagen.export.motion` uses them too); :func:`usd_validation_errors` runs
 usd-core's own validators on a written file. Files are written to a temporary name next to the
 target and renamed, so a failed export leaves nothing half written. USD needs the optional
 ``usd-core`` package (``pip install 'drape[usd]'``).
@@ -43,7 +43,7 @@ from typing import Any
 import numpy as np
 
 from datagen.errors import InputError, require
-from datagen.export.files import atomic_output, check_output_path
+from datagen.files import atomic_output, check_output_path
 
 __all__ = [
     "BODY_COLOR",
@@ -405,7 +405,7 @@ def _write_skeleton(stage, sk: SkeletonAnimation, poses: np.ndarray, trans: np.n
     from pxr import Gf, Usd, UsdGeom, UsdSkel, Vt
 
     from datagen.body.skeleton import SMPL_JOINT_NAMES
-    from datagen.motion.rotations import axis_angle_to_quaternion_np
+    from datagen.geometry.rotations import axis_angle_to_quaternion_np
 
     J = len(sk.parents)
     parents = np.asarray(sk.parents, dtype=np.int64)

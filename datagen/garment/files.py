@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from datagen.errors import InputError
-from datagen.garment.materials import Material, material
+from datagen.materials import Material, material
 from datagen.garment.mesh import GarmentMesh
 
 __all__ = ["UNIT_SCALES", "load_garment_file"]

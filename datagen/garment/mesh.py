@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from datagen.errors import InputError
-from datagen.garment.materials import Material
+from datagen.materials import Material
 
 __all__ = ["GarmentMesh", "boundary_loops", "load_garment"]
 

@@ -17,7 +17,7 @@ import numpy as np
 
 from datagen.errors import InputError
 from datagen.garment import levelset
-from datagen.garment.materials import Material, material
+from datagen.materials import Material, material
 from datagen.garment.mesh import GarmentMesh
 from datagen.params import ParamSpec, draw_params
 

@@ -19,8 +19,12 @@ EXECUTION_ONLY = (("simulation", "batch_size"),)
 result does not depend on its batch: ``tests/sim/test_physics.py``): a store can be resumed with a
 different value, e.g. a smaller batch after a device ran out of memory."""
 
-DATA_PACKAGES = ("body", "garment", "motion", "sim", "targets", "generate", "store")
+DATA_PACKAGES = ("geometry", "body", "garment", "motion", "sim", "targets", "generate", "store")
 """The subpackages of ``datagen`` whose source makes or lays out the data."""
+
+DATA_MODULES = ("materials.py", "params.py")
+"""The modules at the top of ``datagen`` whose source the data depends on (material presets, the
+style-parameter draws)."""
 
 DATA_LIBRARIES = ("warp-lang", "anny", "numpy", "scipy", "torch", "pymeshlab", "trimesh", "scikit-learn")
 """Libraries whose versions the data depends on (kernels, the body model, meshing, the fit model)."""
@@ -37,11 +41,12 @@ def identity_config(config: dict) -> dict:
 
 @cache
 def code_version() -> str:
-    """A 16-hex-digit digest of the source of :data:`DATA_PACKAGES`, the store schema and the
+    """A 16-hex-digit digest of the source of :data:`DATA_PACKAGES` and :data:`DATA_MODULES`, the store schema and the
     versions of :data:`DATA_LIBRARIES` (those installed)."""
     root = Path(__file__).resolve().parents[1]
     h = hashlib.sha256()
     files = sorted(p for pkg in DATA_PACKAGES for p in (root / pkg).rglob("*.py"))
+    files += [root / name for name in DATA_MODULES]
     files += sorted((root.parent / "schemas").glob("*.py"))
     for p in files:
         h.update(str(p.relative_to(root.parent)).encode())

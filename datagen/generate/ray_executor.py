@@ -24,7 +24,8 @@ def _import_ray():
 def _task(config_dict: dict, out: str, indices: list[int], device: str | None) -> list[int]:
     from datagen.config import load_config
     from datagen.generate.config import DatasetConfig
-    from datagen.generate.run import Plan, open_writer, simulate_samples
+    from datagen.generate.plan import Plan, open_writer
+    from datagen.generate.samples import simulate_samples
 
     plan = Plan(load_config(DatasetConfig, config_dict))
     writer = open_writer(plan, out)

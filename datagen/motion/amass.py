@@ -49,7 +49,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.motion.labels import label_index, label_vocabulary
 from datagen.motion.motion import Motion
-from datagen.motion.rotations import axis_angle_to_matrix_np, matrix_to_axis_angle_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np, matrix_to_axis_angle_np
 
 __all__ = [
     "AMASS_POSE_WIDTHS",

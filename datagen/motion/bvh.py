@@ -69,7 +69,7 @@ from datagen.body.skeleton import JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS
 from datagen.errors import InputError
 from datagen.motion.amass import LabelMap, resolve_label, up_axis_rotation
 from datagen.motion.motion import Motion
-from datagen.motion.rotations import axis_angle_to_matrix_np, matrix_to_axis_angle_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np, matrix_to_axis_angle_np
 
 __all__ = [
     "BUILTIN_JOINT_MAPS",

@@ -3,7 +3,7 @@
 A motion is ``T`` frames sampled at ``fps`` frames per second; frame ``k`` is at time ``k / fps``
 seconds. Poses are SMPL's θ per frame, 24 axis-angle rotations in radians in the joint order of
 :mod:`datagen.body.skeleton` (the root's global orientation first), with the conventions of
-:mod:`datagen.motion.rotations`. Translations are the root translation in metres, the ``transl``
+:mod:`datagen.geometry.rotations`. Translations are the root translation in metres, the ``transl``
 that :func:`datagen.body.lbs.lbs_np` adds to every vertex.
 
 On disk a motion is an ``.npz`` in an AMASS-like layout (see :meth:`Motion.save_npz`), read back
@@ -23,7 +23,7 @@ import numpy as np
 
 from datagen.body.skeleton import JOINT_COUNT, POSE_DIM
 from datagen.errors import InputError
-from datagen.motion.rotations import (
+from datagen.geometry.rotations import (
     axis_angle_to_quaternion_np,
     quaternion_slerp_np,
     quaternion_to_axis_angle_np,

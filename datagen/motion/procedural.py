@@ -27,7 +27,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from datagen.body.skeleton import JOINT_COUNT, SMPL_JOINT_NAMES, SMPL_PARENTS
-from datagen.motion.rotations import matrix_to_axis_angle_np
+from datagen.geometry.rotations import matrix_to_axis_angle_np
 
 __all__ = [
     "Footsteps",

@@ -27,7 +27,7 @@ import numpy as np
 from datagen.body.skeleton import SMPL_JOINT_NAMES
 from datagen.motion.motion import Motion
 from datagen.motion.procedural import euler_angles
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 __all__ = ["JOINT_LIMITS_DEG", "BodyProbe", "MotionQuality", "filter_motions", "measure_motion"]
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from datagen.errors import InputError
-from datagen.garment.materials import Material, material
+from datagen.materials import Material, material
 
 
 @dataclass

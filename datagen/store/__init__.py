@@ -4,29 +4,40 @@
   crash-safely from any number of processes, then :meth:`~StoreWriter.pack` it in one.
 - :func:`open_store` (``reader``): samples, frames, segments, garment meshes, body and fit models.
 - :func:`validate` (``validate``): every problem of a packed store, as messages.
-- :func:`store_info` / :func:`format_store_info` (``info``): counts, sizes on disk, failures;
-  :func:`plot_store_info`: the same and the fit attribute and body shapes as PNG plots.
+- :func:`store_info` / :func:`format_store_info` (``info``): counts, sizes on disk, failures
+  (plots of a store: :func:`datagen.export.plots.plot_store_info`).
+
+The names below are loaded on first use (PEP 562), so ``from datagen.store import open_store``
+loads the reader alone: a trainer's DataLoader workers never import the writer (``fcntl``),
+the validator or the summary. ``tests/store/test_store.py`` checks it.
 
 See ``docs/store.md``.
 """
 
-from datagen.store.info import format_store_info, plot_store_info, store_info
-from datagen.store.layout import StorageError
-from datagen.store.reader import DatasetStore, open_store
-from datagen.store.validate import validate
-from datagen.store.writer import SAMPLE_ARRAYS, SAMPLE_SCALARS, StoreWriter, check_sample, check_static
+from __future__ import annotations
 
-__all__ = [
-    "SAMPLE_ARRAYS",
-    "SAMPLE_SCALARS",
-    "DatasetStore",
-    "StorageError",
-    "StoreWriter",
-    "check_sample",
-    "check_static",
-    "format_store_info",
-    "open_store",
-    "plot_store_info",
-    "store_info",
-    "validate",
-]
+import importlib
+
+_EXPORTS = {
+    "DatasetStore": "reader", "open_store": "reader",
+    "StorageError": "layout",
+    "SAMPLE_ARRAYS": "writer", "SAMPLE_SCALARS": "writer", "StoreWriter": "writer", "check_sample": "writer",
+    "check_static": "writer",
+    "validate": "validate",
+    "format_store_info": "info", "store_info": "info",
+}
+
+__all__ = sorted(_EXPORTS)
+
+
+def __getattr__(name: str):
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module 'datagen.store' has no attribute {name!r}")
+    value = getattr(importlib.import_module(f"datagen.store.{module}"), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_EXPORTS))

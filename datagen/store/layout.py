@@ -209,3 +209,12 @@ def directory_bytes(path: Path) -> int:
             with contextlib.suppress(OSError):
                 total += os.lstat(os.path.join(dirpath, name)).st_size
     return total
+
+
+def segment_table(frame_counts: np.ndarray, failure: np.ndarray, segment_length: int) -> np.ndarray:
+    """(sample, first frame) of every non-overlapping ``segment_length``-frame segment of every
+    non-failed sample with at least that many frames, [n_segments, 2] int64, in sample order."""
+    rows = [(i, t0) for i, (T, f) in enumerate(zip(np.asarray(frame_counts).tolist(), np.asarray(failure).tolist(),
+                                                   strict=True)) if f == 0
+            for t0 in range(0, T - segment_length + 1, segment_length)]
+    return np.asarray(rows, dtype=np.int64).reshape(-1, 2)

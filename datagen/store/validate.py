@@ -454,7 +454,7 @@ class _Checker:
         L = self.attrs.get("segment_length")
         if seg is None or fs is None or failure is None or not isinstance(L, int) or len(fs) != len(failure) + 1:
             return
-        from datagen.store.writer import segment_table
+        from datagen.store.layout import segment_table
 
         expected = segment_table(np.diff(fs), failure, L)
         if seg.shape == expected.shape and np.array_equal(seg, expected):

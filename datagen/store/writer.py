@@ -48,6 +48,7 @@ from datagen.store.layout import (
     parse_sample_dir_name,
     read_root_attributes,
     sample_dir_name,
+    segment_table,
     specs_of_group,
     static_dir_name,
     storage_errors,
@@ -92,15 +93,6 @@ def compressor():
     from zarr.codecs import BloscCodec
 
     return BloscCodec(cname=COMPRESSION["cname"], clevel=COMPRESSION["clevel"], shuffle=COMPRESSION["shuffle"])
-
-
-def segment_table(frame_counts: np.ndarray, failure: np.ndarray, segment_length: int) -> np.ndarray:
-    """(sample, first frame) of every non-overlapping ``segment_length``-frame segment of every
-    non-failed sample with at least that many frames, [n_segments, 2] int64, in sample order."""
-    rows = [(i, t0) for i, (T, f) in enumerate(zip(np.asarray(frame_counts).tolist(), np.asarray(failure).tolist(),
-                                                   strict=True)) if f == 0
-            for t0 in range(0, T - segment_length + 1, segment_length)]
-    return np.asarray(rows, dtype=np.int64).reshape(-1, 2)
 
 
 # ------------------------------------------------------------------------------------------ checks

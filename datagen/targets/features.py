@@ -35,7 +35,7 @@ from scipy.spatial import cKDTree
 from datagen.body.lbs import rigid_transforms_np
 from datagen.body.model import BodyModel
 from datagen.errors import InputError
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 from datagen.targets.coarse import SmoothingConfig, coarse_from_detail
 
 __all__ = [

@@ -5,7 +5,7 @@ import pytest
 import torch
 
 from datagen.errors import InputError
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 
 def loop_lbs(m, betas, pose):

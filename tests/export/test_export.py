@@ -148,7 +148,7 @@ def test_writer_refuses_bad_arrays_and_paths(tmp_path):
 def test_unwritable_directory_is_refused_before_any_work(tmp_path, monkeypatch):
     """(Permission bits do not stop root, so the check itself is exercised through os.access.)"""
     from datagen.export import files
-    from datagen.export.files import check_output_dir, check_output_path
+    from datagen.files import check_output_dir, check_output_path
 
     monkeypatch.setattr(files.os, "access", lambda *a, **k: False)
     with pytest.raises(InputError, match="is not writable"):
@@ -160,7 +160,7 @@ def test_unwritable_directory_is_refused_before_any_work(tmp_path, monkeypatch):
 def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path, monkeypatch):
     pytest.importorskip("pxr", reason="USD export needs usd-core (pip install 'drape[usd]')")
     from datagen.export import usd
-    from datagen.export.files import atomic_output
+    from datagen.files import atomic_output
 
     body, bf, garment, gf, _, _ = synthetic()
     target = tmp_path / "a.usd"
@@ -341,7 +341,7 @@ def test_skeleton_animates_and_skins_the_body_like_the_store(store_path, store, 
 
     from datagen.body.skeleton import SMPL_JOINT_NAMES
     from datagen.export.usd import usd_validation_errors
-    from datagen.motion.rotations import axis_angle_to_matrix_np, quaternion_to_axis_angle_np
+    from datagen.geometry.rotations import axis_angle_to_matrix_np, quaternion_to_axis_angle_np
 
     i = ok_sample
     out = tmp_path / "rig.usda"

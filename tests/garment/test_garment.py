@@ -8,7 +8,7 @@ import pytest
 from datagen.errors import InputError
 from datagen.garment.checks import check_garment
 from datagen.garment.levelset import cut_mesh
-from datagen.garment.materials import MATERIALS, material
+from datagen.materials import MATERIALS, material
 from datagen.garment.mesh import boundary_loops, load_garment
 from datagen.garment.types import GARMENT_TYPES, garment_params, make_garment
 

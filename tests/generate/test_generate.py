@@ -146,7 +146,7 @@ def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keep
     patched to 1 MiB after that): the run stops with an error that gives the figures and names
     simulation.batch_size, the first sample stays staged and the rest are missing, ready to resume."""
     import datagen.sim.scene as sc
-    from datagen.generate.run import Plan, open_writer
+    from datagen.generate.plan import Plan, open_writer
 
     calls = []
 

@@ -14,7 +14,7 @@ from datagen.motion.amass import (
     up_axis_rotation,
 )
 from datagen.motion.labels import LABELS
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 C = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0], [0.0, -1.0, 0.0]])  # -90 deg about X: Z up -> Y up
 

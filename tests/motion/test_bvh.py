@@ -10,7 +10,7 @@ from datagen.body.skeleton import SMPL_JOINT_NAMES, SMPL_PARENTS
 from datagen.errors import InputError
 from datagen.motion.bvh import UNIT_SCALES, _import_bvhio, read_bvh, write_bvh
 from datagen.motion.motion import Motion
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 bvhio = _import_bvhio()
 CMU_UNIT = 0.0254 / 0.45

@@ -9,7 +9,7 @@ from datagen.errors import InputError
 from datagen.motion.labels import LABELS, label_index, label_vocabulary
 from datagen.motion.library import _GENERATORS, LABEL_PARAMS, make_motion, style_params
 from datagen.motion.procedural import J, Rig, euler, forward_kinematics
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 FRAMES = 60
 
@@ -136,7 +136,7 @@ def test_every_label_passes_the_quality_filters(library, probe):
 def test_filter_drops_an_interpenetrating_motion(library, probe):
     from datagen.motion.motion import Motion
     from datagen.motion.quality import filter_motions
-    from datagen.motion.rotations import matrix_to_axis_angle_np
+    from datagen.geometry.rotations import matrix_to_axis_angle_np
 
     bad = library["wave"].poses.copy()
     # left arm lowered and driven across the chest: the forearm goes into the torso
@@ -174,7 +174,7 @@ def test_cli_list_make_export_import(tmp_path, capsys):
 
 def test_every_label_exports_to_bvh_and_usd_and_reads_back(library, default_body, tmp_path):
     from datagen.motion.bvh import read_bvh
-    from datagen.motion.export import write_motion_bvh, write_motion_usd
+    from datagen.export.motion import write_motion_bvh, write_motion_usd
 
     pytest.importorskip("pxr", reason="USD export needs usd-core (pip install 'drape[usd]')")
     from pxr import Usd, UsdGeom

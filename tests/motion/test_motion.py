@@ -8,7 +8,7 @@ from scipy.spatial.transform import Rotation
 
 from datagen.errors import InputError
 from datagen.motion.motion import NPZ_KEYS, Motion
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 
 def make_motion(frames=31, fps=30.0, seed=0, **kwargs):

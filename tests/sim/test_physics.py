@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from datagen.garment.materials import Material
+from datagen.materials import Material
 from datagen.sim.model import ClothModelBuilder
 from datagen.sim.solver import SolverConfig, SolverVBD
 from datagen.sim.state import BodyControl, ClothState

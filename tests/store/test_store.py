@@ -252,8 +252,8 @@ def test_info_plots_write_one_png_per_view_of_the_store(packed, tmp_path, capsys
     from PIL import Image
 
     from datagen.cli import main
-    from datagen.store import plot_store_info
-    from datagen.store.info import PLOT_FILES
+    from datagen.export.plots import plot_store_info
+    from datagen.export.plots import PLOT_FILES
 
     written = plot_store_info(packed, tmp_path / "plots" / "nested")
     assert [p.name for p in written] == list(PLOT_FILES)

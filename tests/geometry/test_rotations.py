@@ -5,7 +5,7 @@ import pytest
 import torch
 from scipy.spatial.transform import Rotation, Slerp
 
-from datagen.motion import rotations as rot
+from datagen.geometry import rotations as rot
 
 RNG_SEED = 1234
 N = 500

@@ -22,7 +22,7 @@ import numpy as np
 
 from datagen.body.skeleton import SMPL_PARENTS
 from datagen.errors import InputError, require
-from datagen.export.files import check_output_path
+from datagen.files import check_output_path
 from datagen.export.usd import BODY_COLOR, USD_SUFFIXES, define_mesh, new_stage, save_stage, usd_validation_errors
 from datagen.motion.bvh import write_bvh
 from datagen.motion.motion import Motion

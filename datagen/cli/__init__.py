@@ -32,12 +32,12 @@ def build_parser() -> argparse.ArgumentParser:
                         help="how much progress to print")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
-    from datagen.body import cli as body_cli
-    from datagen.export import cli as export_cli
-    from datagen.garment import cli as garment_cli
-    from datagen.generate import cli as generate_cli
-    from datagen.motion import cli as motion_cli
-    from datagen.sim import cli as sim_cli
+    from datagen.cli import body as body_cli
+    from datagen.cli import export as export_cli
+    from datagen.cli import garment as garment_cli
+    from datagen.cli import generate as generate_cli
+    from datagen.cli import motion as motion_cli
+    from datagen.cli import simulate as sim_cli
 
     body_cli.register(sub, _Formatter)
     motion_cli.register(sub, _Formatter)

@@ -113,7 +113,7 @@ def _validate(path: Path) -> list[str]:
 def _cmd_export_usd(args) -> int:
     from datagen.errors import require
     from datagen.export.animation import from_npz, from_store
-    from datagen.export.files import check_output_dir, check_output_path
+    from datagen.files import check_output_dir, check_output_path
     from datagen.export.usd import USD_SUFFIXES
 
     require("pxr", "USD export", extra="usd")
@@ -198,7 +198,7 @@ def _load_prediction(path: str, frame_count: int) -> np.ndarray:
 
 def _cmd_preview(args) -> int:
     from datagen.export.animation import check_sample, from_npz, from_store, parse_frames
-    from datagen.export.files import check_output_path
+    from datagen.files import check_output_path
     from datagen.export.preview import (
         CLIP_SUFFIXES,
         IMAGE_SUFFIXES,

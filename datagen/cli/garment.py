@@ -39,7 +39,7 @@ def register(sub, formatter) -> None:
 
 
 def _cmd_list(args) -> int:
-    from datagen.garment.materials import MATERIALS
+    from datagen.materials import MATERIALS
     from datagen.garment.types import GARMENT_TYPES
 
     if args.json:

@@ -151,11 +151,11 @@ def _cmd_export(args) -> int:
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
     if args.format == "bvh":
-        from datagen.motion.export import write_motion_bvh
+        from datagen.export.motion import write_motion_bvh
 
         out = write_motion_bvh(motion, args.out, model, betas)
     else:
-        from datagen.motion.export import write_motion_usd
+        from datagen.export.motion import write_motion_usd
 
         out = write_motion_usd(motion, args.out, model, betas)
     print(f"wrote {out}: {motion.frame_count} frames at {motion.fps:g} fps")

@@ -5,13 +5,13 @@ import pytest
 
 from datagen.errors import InputError
 from datagen.motion.bvh import read_bvh
-from datagen.motion.export import (
+from datagen.export.motion import (
     usd_validation_errors,
     write_motion_bvh,
     write_motion_usd,
 )
 from datagen.motion.motion import Motion
-from datagen.motion.rotations import axis_angle_to_matrix_np
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 
 def small_motion(frames=5, fps=24.0):

@@ -43,7 +43,8 @@ def register(sub, formatter) -> None:
 
 def _cmd_generate(args) -> int:
     from datagen.generate.config import resolve_config
-    from datagen.generate.run import Plan, generate
+    from datagen.generate.plan import Plan
+    from datagen.generate.run import generate
     from datagen.store import format_store_info, store_info, validate
 
     config = resolve_config(args.config, args.preset)
@@ -106,7 +107,7 @@ def _cmd_info(args) -> int:
     info = store_info(args.store)
     print(json.dumps(info, indent=2, default=str) if args.json else format_store_info(info))
     if args.plots is not None:
-        from datagen.store import plot_store_info
+        from datagen.export.plots import plot_store_info
 
         written = plot_store_info(args.store, args.plots)
         print(f"wrote {len(written)} plots to {args.plots}: {', '.join(p.name for p in written)}",

@@ -1,0 +1,196 @@
+"""The plan of a dataset: its numbered scenes, bodies, motions and garment instances, the heavy
+parts built on first use (body model, garments, correspondences), the static groups of its store,
+and the store it writes (:func:`open_writer`). A pure function of the config."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from pathlib import Path
+
+import numpy as np
+
+from datagen.generate.config import DatasetConfig, parse_body, parse_garment, parse_motion
+
+SPLIT_CODES = {"train": 0, "val": 1, "test": 2}
+
+
+@dataclass(frozen=True)
+class ScenePlan:
+    index: int
+    split: str
+    garment: int  # instance index
+    body: int
+    motion: int
+
+
+class Plan:
+    """The numbered scenes, bodies, motions and garment instances of a config (cheap to build;
+    the heavy parts — body model, garments — are built on first use and cached per process)."""
+
+    def __init__(self, config: DatasetConfig):
+        self.config = config
+        self.bodies: list[str] = []
+        self.motions: list[str] = []
+        self.instances: list[tuple[str, str]] = []  # (garment "type:seed", body name)
+        self.scenes: list[ScenePlan] = []
+        index = lambda lst, item: lst.index(item) if item in lst else (lst.append(item) or len(lst) - 1)  # noqa: E731
+        for split, s in config.splits.items():
+            for g in s.garments:
+                for b in s.bodies:
+                    bi = index(self.bodies, b)
+                    gi = index(self.instances, (g, b))
+                    for m in s.motions:
+                        mi = index(self.motions, m)
+                        self.scenes.append(ScenePlan(len(self.scenes), split, gi, bi, mi))
+
+    @property
+    def sample_count(self) -> int:
+        return len(self.scenes)
+
+    # ----------------------------------------------------------------------------- heavy parts
+
+    @cached_property
+    def body_model(self):
+        from datagen.body.cache import default_body
+
+        return default_body()
+
+    @cached_property
+    def subdivided(self):
+        return self.body_model.subdivided()
+
+    @cached_property
+    def betas(self) -> np.ndarray:
+        from datagen.body.shapes import resolve_betas
+
+        out = []
+        for b in self.bodies:
+            name, seed = parse_body(b)
+            out.append(resolve_betas(self.body_model, body=name)[0] if seed is None else
+                       resolve_betas(self.body_model, seed=seed)[0])
+        return np.stack(out)
+
+    def motion(self, m: int):
+        from datagen.motion.library import make_motion
+
+        label, seed = parse_motion(self.motions[m])
+        _, extra = self.run_config.ramp_frames(self.config.fps)
+        return make_motion(label, seed=seed, frames=self.config.frames + extra, fps=self.config.fps)
+
+    @cached_property
+    def run_config(self):
+        from datagen.sim.scene import RunConfig
+        from datagen.sim.solver import SolverConfig
+
+        s = self.config.simulation
+        return RunConfig(settle_rest=s.settle_rest, lead_in=s.lead_in, settle_pose=s.settle_pose, ramp=s.ramp,
+                         solver=SolverConfig(substeps=s.substeps, iterations=s.iterations,
+                                             self_collision=s.self_collision))
+
+    _garments: dict
+
+    def garment(self, g: int):
+        """Garment instance g (built once per process)."""
+        cache = self.__dict__.setdefault("_garments", {})
+        if g not in cache:
+            from datagen.garment.cache import cached_garment
+
+            kind, seed = parse_garment(self.instances[g][0])
+            b = self.bodies.index(self.instances[g][1])
+            cache[g] = cached_garment(kind, self.body_model, self.betas[b], seed=seed,
+                                      target_edge_length=self.config.garment_edge_length)
+        return cache[g]
+
+    def correspondence(self, g: int) -> dict:
+        cache = self.__dict__.setdefault("_corr", {})
+        if g not in cache:
+            from datagen.targets import garment_correspondence
+
+            b = self.bodies.index(self.instances[g][1])
+            cache[g] = garment_correspondence(self.garment(g).vertices, self.subdivided, self.betas[b])
+        return cache[g]
+
+
+# --------------------------------------------------------------------------------- static groups
+
+
+def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
+    """group -> (arrays, names) for every static group of the store."""
+    from datagen.materials import MATERIALS
+    from datagen.garment.types import GARMENT_TYPES
+    from datagen.motion.labels import LABELS
+    from datagen.targets import fit_attribute, fit_attribute_model, fit_pair
+
+    m = plan.body_model
+    f32 = np.float32
+    body = {"v_template": m.v_template.astype(f32), "shapedirs": m.shapedirs.astype(f32),
+            "J_regressor": np.asarray(m.J_regressor.todense() if hasattr(m.J_regressor, "todense") else m.J_regressor,
+                                      dtype=f32),
+            "weights": m.weights.astype(f32), "parents": np.asarray(m.parents, dtype=np.int32),
+            "faces": m.faces.astype(np.int32)}
+    body["parents"][0] = -1
+    motions = [plan.motion(i) for i in range(len(plan.motions))]
+    motion_arrays = {"label": np.array([LABELS.index(parse_motion(s)[0]) for s in plan.motions], np.int32),
+                     "seed": np.array([parse_motion(s)[1] for s in plan.motions], np.int32),
+                     "frame_count": np.array([mo.frame_count for mo in motions], np.int32)}
+    garments = [plan.garment(g) for g in range(len(plan.instances))]
+    regions = sorted({r for g in garments for r in g.region_names})
+    materials = list(MATERIALS)
+    pairs = []
+    for g in range(len(garments)):
+        b = plan.bodies.index(plan.instances[g][1])
+        pairs.append(fit_pair(garments[g].vertices, garments[g].faces, plan.subdivided, plan.betas[b],
+                              indicator=plan.correspondence(g)["indicator"]))
+    train = sorted({s.garment for s in plan.scenes if s.split == "train"})
+    fit = fit_attribute_model([pairs[g] for g in train], subsample_count=min(len(g.vertices) for g in garments),
+                              subsample_seed=plan.config.seed, random_state=plan.config.seed)
+    alpha = np.stack([fit_attribute(fit, p) for p in pairs]).astype(f32)
+    vs = np.concatenate([[0], np.cumsum([len(g.vertices) for g in garments])]).astype(np.int64)
+    fs = np.concatenate([[0], np.cumsum([len(g.faces) for g in garments])]).astype(np.int64)
+    garment_arrays = {
+        "vertex_start": vs, "face_start": fs,
+        "rest_vertices": np.concatenate([g.vertices for g in garments]).astype(f32),
+        "faces": np.concatenate([g.faces for g in garments]).astype(np.int32),
+        "uv": np.concatenate([g.uv for g in garments]).astype(f32),
+        "region": np.concatenate([np.array([regions.index(g.region_names[r]) for r in g.vertex_region], np.int32)
+                                  for g in garments]),
+        "seam": np.concatenate([g.seam_vertex for g in garments]).astype(np.uint8),
+        "indicator": np.concatenate([plan.correspondence(g)["indicator"] for g in range(len(garments))]).astype(
+            np.int32),
+        "skin_weights": np.concatenate([plan.correspondence(g)["skin_weights"] for g in range(len(garments))]).astype(
+            f32),
+        "type": np.array([list(GARMENT_TYPES).index(parse_garment(i[0])[0]) for i in plan.instances], np.int32),
+        "seed": np.array([parse_garment(i[0])[1] for i in plan.instances], np.int32),
+        "body": np.array([plan.bodies.index(i[1]) for i in plan.instances], np.int32),
+        "material": np.array([materials.index(g.material.name) for g in garments], np.int32),
+        "alpha": alpha,
+        "rest_area": np.array([g.metadata.get("rest_area", _area(g.vertices, g.faces)) for g in garments], f32),
+    }
+    fa = fit.as_arrays()
+    return {
+        "body": (body, None),
+        "bodies": ({"betas": plan.betas.astype(f32)}, {"body_names": list(plan.bodies)}),
+        "motions": (motion_arrays, {"label_names": list(LABELS)}),
+        "garments": (garment_arrays, {"garment_type_names": list(GARMENT_TYPES), "material_names": materials,
+                                      "region_names": regions}),
+        "fit": ({"components": fa["components"].astype(f32), "mean": fa["mean"].astype(f32),
+                 "noise_variance": fa["noise_variance"].astype(f32), "subsample": fa["subsample"]}, None),
+    }
+
+
+def _area(v: np.ndarray, f: np.ndarray) -> float:
+    return float(0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum())
+
+
+def open_writer(plan: Plan, out: str | Path):
+    """The store ``out`` for ``plan`` (created, or reopened when its identity matches: the config
+    without execution-only fields, the code version, seed, sample count and segment length)."""
+    from datagen.generate.identity import code_version, identity_config
+    from datagen.store import StoreWriter
+
+    config = plan.config
+    return StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
+                            seed=config.seed, sample_count=plan.sample_count, segment_length=config.segment_length)
+
+
