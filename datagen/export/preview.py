@@ -31,8 +31,8 @@ import numpy as np
 from datagen.body.render import VIEWS, MeshLayer, pyplot, shade_polygons, view_rotation
 from datagen.errors import InputError, MissingDependencyError
 from datagen.export.animation import Animation, quiet_warp
-from datagen.files import atomic_output, check_output_path
 from datagen.export.usd import GARMENT_COLOR, REGION_COLORS
+from datagen.files import atomic_output, check_output_path
 
 __all__ = ["CLIP_SUFFIXES", "COLOR_BY", "IMAGE_SUFFIXES", "body_distance", "parse_size", "parse_view",
            "render_clip", "render_frame", "vertex_stretch"]
@@ -107,19 +107,12 @@ def vertex_stretch(vertices: np.ndarray, faces: np.ndarray, rest: np.ndarray) ->
 def body_distance(vertices: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray) -> np.ndarray:
     """Signed distance [T, V] (m) from garment vertices [T, V, 3] to the body surfaces [T, B, 3];
     negative inside the body."""
-    import warp as wp
-
-    from datagen.garment.checks import _kernels, _wmesh  # the garment checks' signed-distance query
+    from datagen.geometry.queries import mesh_signed_distance, warp_mesh
 
     quiet_warp()
-    kernel = _kernels()["inside"]
     out = np.zeros(vertices.shape[:2], dtype=np.float64)
     for k in range(len(vertices)):
-        mesh = _wmesh(body_vertices[k], body_faces)
-        d = wp.zeros(vertices.shape[1], dtype=float)
-        wp.launch(kernel, dim=vertices.shape[1],
-                  inputs=[mesh.id, wp.array(np.ascontiguousarray(vertices[k], dtype=np.float32), dtype=wp.vec3), d])
-        out[k] = d.numpy()
+        out[k] = mesh_signed_distance(warp_mesh(body_vertices[k], body_faces), vertices[k], 10.0)
     return out
 
 

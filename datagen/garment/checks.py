@@ -57,46 +57,6 @@ def self_intersections(vertices: np.ndarray, faces: np.ndarray) -> int:
     return int(ms.current_mesh().selected_face_number())
 
 
-_KERNELS = {}
-
-
-def _kernels():
-    if not _KERNELS:
-        import warp as wp
-
-        @wp.kernel
-        def inside(mesh: wp.uint64, pts: wp.array(dtype=wp.vec3), out: wp.array(dtype=float)):
-            tid = wp.tid()
-            q = wp.mesh_query_point_sign_winding_number(mesh, pts[tid], 10.0, 2.0, 0.5)
-            c = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
-            out[tid] = wp.length(pts[tid] - c) * q.sign
-
-        @wp.kernel
-        def crossing(mesh: wp.uint64, a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.int32)):
-            tid = wp.tid()
-            d = b[tid] - a[tid]
-            L = wp.length(d)
-            q = wp.mesh_query_ray(mesh, a[tid], d / L, L)
-            if q.result:
-                out[tid] = 1
-
-        @wp.kernel
-        def closest(mesh: wp.uint64, pts: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.vec3)):
-            tid = wp.tid()
-            q = wp.mesh_query_point_no_sign(mesh, pts[tid], 10.0)
-            out[tid] = wp.mesh_eval_position(mesh, q.face, q.u, q.v)
-
-        _KERNELS["inside"], _KERNELS["crossing"], _KERNELS["closest"] = inside, crossing, closest
-    return _KERNELS
-
-
-def _wmesh(v, f):
-    import warp as wp
-
-    return wp.Mesh(points=wp.array(np.asarray(v, np.float32), dtype=wp.vec3),
-                   indices=wp.array(np.asarray(f, np.int32).ravel(), dtype=wp.int32))
-
-
 def _edges(f):
     return np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0)
 
@@ -107,38 +67,30 @@ def placement(vertices: np.ndarray, faces: np.ndarray, body_vertices: np.ndarray
     Two triangle meshes intersect exactly where an edge of one passes through a triangle of the
     other, so crossing is tested both ways with warp ray queries along every edge.
     """
-    import warp as wp
+    from datagen.geometry.queries import mesh_signed_distance, segments_hit_mesh, warp_mesh
 
-    k = _kernels()
-    body = _wmesh(body_vertices, body_faces)
-    cloth = _wmesh(vertices, faces)
-    sd = wp.zeros(len(vertices), dtype=float)
-    wp.launch(k["inside"], dim=len(vertices), inputs=[body.id, wp.array(np.asarray(vertices, np.float32), dtype=wp.vec3), sd])
-    sd = sd.numpy()
+    body = warp_mesh(body_vertices, body_faces)
+    cloth = warp_mesh(vertices, faces)
+    sd = mesh_signed_distance(body, vertices, 10.0)
     crossings = 0
     for (va, fa), mesh in (((vertices, faces), body), ((body_vertices, body_faces), cloth)):
         e = _edges(np.asarray(fa))
-        a = wp.array(np.asarray(va, np.float32)[e[:, 0]], dtype=wp.vec3)
-        b = wp.array(np.asarray(va, np.float32)[e[:, 1]], dtype=wp.vec3)
-        out = wp.zeros(len(e), dtype=wp.int32)
-        wp.launch(k["crossing"], dim=len(e), inputs=[mesh.id, a, b, out])
-        crossings += int(out.numpy().sum())
+        va = np.asarray(va, np.float32)
+        crossings += int(segments_hit_mesh(mesh, va[e[:, 0]], va[e[:, 1]]).sum())
     return {"vertices_inside": int((sd < 0).sum()), "edge_crossings": crossings, "min_clearance": float(sd.min())}
 
 
 def orientation(vertices: np.ndarray, faces: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray) -> dict:
     """Share of the garment's area whose face normal points away from the body: the normal of each
     face against the direction from the closest body point to the face's centre (1.0: all outward)."""
-    import warp as wp
+    from datagen.geometry.queries import mesh_closest_points, warp_mesh
 
     tri = np.asarray(vertices)[np.asarray(faces)]
     n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
     area = 0.5 * np.linalg.norm(n, axis=1)
     centre = tri.mean(axis=1)
-    body = _wmesh(body_vertices, body_faces)
-    out = wp.zeros(len(centre), dtype=wp.vec3)
-    wp.launch(_kernels()["closest"], dim=len(centre), inputs=[body.id, wp.array(centre.astype(np.float32), dtype=wp.vec3), out])
-    away = np.einsum("ij,ij->i", n, centre - out.numpy().astype(np.float64)) > 0
+    closest = mesh_closest_points(warp_mesh(body_vertices, body_faces), centre.astype(np.float32))
+    away = np.einsum("ij,ij->i", n, centre - closest.astype(np.float64)) > 0
     return {"outward_area_fraction": float(area[away].sum() / max(area.sum(), 1e-30))}
 
 

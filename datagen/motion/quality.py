@@ -23,11 +23,13 @@ import logging
 from dataclasses import asdict, dataclass
 
 import numpy as np
+import warp as wp
 
 from datagen.body.skeleton import SMPL_JOINT_NAMES
+from datagen.geometry.queries import signed_distance
+from datagen.geometry.rotations import axis_angle_to_matrix_np
 from datagen.motion.motion import Motion
 from datagen.motion.procedural import euler_angles
-from datagen.geometry.rotations import axis_angle_to_matrix_np
 
 __all__ = ["JOINT_LIMITS_DEG", "BodyProbe", "MotionQuality", "filter_motions", "measure_motion"]
 
@@ -92,12 +94,22 @@ class MotionQuality:
         return asdict(self)
 
 
+
+@wp.kernel
+def _inside_torso(body: wp.uint64, torso: wp.uint64, points: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.int32)):
+    """1 for a point inside the body (winding number) and inside the torso (the torso's own normals)."""
+    tid = wp.tid()
+    p = points[tid]
+    if signed_distance(body, p, 1.0) < 0.0:
+        t = wp.mesh_query_point_sign_normal(torso, p, 0.1)
+        if t.result and t.sign < 0.0:
+            out[tid] = 1
+
+
 class BodyProbe:
     """A body prepared for quality checks: limb/torso vertex sets and a warp mesh for queries."""
 
     def __init__(self, model, betas=None, eps: float = 0.004, device: str | None = None):
-        import warp as wp
-
         self.model = model
         self.betas = np.zeros(model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64)
         self.eps = float(eps)
@@ -118,13 +130,11 @@ class BodyProbe:
         self.foot_vertices = np.flatnonzero(np.isin(names, list(_FEET)))
         self.ground_y = float(rest_v[:, 1].min())
         self.rest_joints = rest_j
-        self._wp = wp
         self.device = device or wp.get_preferred_device()
         self._mesh = None
         self._torso = None
 
     def _meshes(self, verts: np.ndarray):
-        wp = self._wp
         pts = wp.array(verts.astype(np.float32), dtype=wp.vec3, device=self.device)
         tpts = wp.array(verts.astype(np.float32), dtype=wp.vec3, device=self.device)
         if self._mesh is None:
@@ -140,7 +150,6 @@ class BodyProbe:
 
     def penetrating(self, verts: np.ndarray) -> int:
         """Number of limb vertices inside the torso for one posed frame ``verts`` [V, 3]."""
-        wp = self._wp
         normals = _vertex_normals(verts, self.faces)
         q = verts[self.limb_vertices] + self.eps * normals[self.limb_vertices]
         mesh, torso = self._meshes(verts)
@@ -159,33 +168,8 @@ def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-12)
 
 
-def _kernel():
-    import warp as wp
-
-    @wp.kernel
-    def inside_torso(body: wp.uint64, torso: wp.uint64, points: wp.array(dtype=wp.vec3), out: wp.array(dtype=wp.int32)):
-        tid = wp.tid()
-        p = points[tid]
-        q = wp.mesh_query_point_sign_winding_number(body, p, 1.0, 2.0, 0.5)
-        if q.result and q.sign < 0.0:
-            t = wp.mesh_query_point_sign_normal(torso, p, 0.1)
-            if t.result and t.sign < 0.0:
-                out[tid] = 1
-    return inside_torso
-
-
-_inside_torso = None
-
-
-def _ensure_kernel():
-    global _inside_torso
-    if _inside_torso is None:
-        _inside_torso = _kernel()
-
-
 def measure_motion(motion: Motion, probe: BodyProbe, *, stride: int = 3, chunk: int = 64) -> MotionQuality:
     """Measure ``motion`` on ``probe``'s body; interpenetration is checked every ``stride`` frames."""
-    _ensure_kernel()
     model, betas = probe.model, probe.betas
     T = motion.frame_count
     fps = motion.fps

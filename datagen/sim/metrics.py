@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 import warp as wp
 
+from datagen.geometry.queries import signed_distance
 from datagen.sim.kernels import face_bounds
 
 METRIC_NAMES = ("stretch_max", "stretch_mean", "penetration_count", "penetration_depth", "self_intersections",
@@ -53,10 +54,8 @@ def _inside(body_meshes: wp.array(dtype=wp.uint64), x: wp.array(dtype=wp.vec3), 
     i = wp.tid()
     p = x[i]
     mesh = body_meshes[scene[i]]
-    depth[i] = 0.0
-    q = wp.mesh_query_point_sign_winding_number(mesh, p, 0.5, 2.0, 0.5)
-    if q.result and q.sign < 0.0:
-        depth[i] = wp.length(p - wp.mesh_eval_position(mesh, q.face, q.u, q.v))
+    d = signed_distance(mesh, p, 0.5)
+    depth[i] = wp.max(-d, 0.0)
 
 
 @wp.func
