@@ -43,13 +43,14 @@ def _cmd_list(args) -> int:
     from datagen.garment.types import GARMENT_TYPES
 
     if args.json:
-        print(json.dumps({k: {"material": v["material"], "boundary_loops": v["loops"],
-                              "params": {n: {"low": s.low, "high": s.high, "doc": s.doc} for n, s in v["params"].items()}}
+        print(json.dumps({k: {"code": v.code, "material": v.material, "boundary_loops": v.boundary_loops,
+                              "edge_length": v.edge_length,
+                              "params": {n: {"low": s.low, "high": s.high, "doc": s.doc} for n, s in v.params.items()}}
                           for k, v in GARMENT_TYPES.items()}, indent=2))
         return 0
     for k, v in GARMENT_TYPES.items():
-        print(f"{k} (material {v['material']}, {v['loops']} openings)")
-        for n, s in v["params"].items():
+        print(f"{k} (code {v.code}, material {v.material}, {v.boundary_loops} openings, edge {1000 * v.edge_length:g} mm)")
+        for n, s in v.params.items():
             print(f"    {n:14s} [{s.low:g}, {s.high:g}]  {s.doc}")
     print("materials: " + ", ".join(MATERIALS))
     return 0
@@ -74,9 +75,9 @@ def _cmd_make(args) -> int:
     c = check_garment(garment, np.asarray(model.shaped(betas))[0], model.faces)
     garment.save(out)
     m = garment.metadata
-    print(f"wrote {out}: {args.type} seed {args.seed} on {args.body}: {m['vertex_count']} vertices, {m['face_count']} faces, "
-          f"{m['rest_area_m2']:.2f} m², {m['boundary_loops']} openings, material {garment.material.name} "
-          f"({m['build_seconds']:.1f} s)")
+    print(f"wrote {out}: {args.type} seed {args.seed} on {args.body}: {m.vertex_count} vertices, {m.face_count} faces, "
+          f"{m.rest_area_m2:.2f} m², {m.boundary_loops} openings, material {garment.material.name} "
+          f"({m.build_seconds:.1f} s)")
     print(f"checks: {'ok' if c['ok'] else 'FAILED: ' + '; '.join(c['failures'])}; min angle {c['min_angle_deg']:.1f}° "
           f"(1st percentile {c['angle_p1_deg']:.1f}°), edge spread {c['edge_spread']:.2f}, clearance "
           f"{c['min_clearance'] * 1000:.1f} mm, self-intersecting faces {c['self_intersecting_faces']}")

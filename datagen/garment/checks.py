@@ -106,8 +106,9 @@ def check_garment(garment, body_vertices: np.ndarray, body_faces: np.ndarray) ->
         failures.append(f"{out['components']} components")
     if not out["winding_consistent"]:
         failures.append("inconsistent winding")
-    if out["boundary_loops"] != garment.metadata.get("expected_boundary_loops", out["boundary_loops"]):
-        failures.append(f"{out['boundary_loops']} boundary loops, expected {garment.metadata['expected_boundary_loops']}")
+    expected = garment.metadata.expected_boundary_loops
+    if expected is not None and out["boundary_loops"] != expected:
+        failures.append(f"{out['boundary_loops']} boundary loops, expected {expected}")
     if out["outward_area_fraction"] < 0.9:
         failures.append(f"normals face the body ({100 * (1 - out['outward_area_fraction']):.0f}% of the area points inwards)")
     if out["self_intersecting_faces"]:

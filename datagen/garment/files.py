@@ -10,6 +10,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.materials import Material, material
 from datagen.garment.mesh import GarmentMesh
+from datagen.garment.metadata import FileOrigin, GarmentMetadata
 
 __all__ = ["UNIT_SCALES", "load_garment_file"]
 
@@ -33,7 +34,7 @@ def load_garment_file(path: str | Path, *, units: str | None = None, up_axis: st
 
     Units are guessed from the size unless given ('m', 'cm', 'mm'); the up axis ('y' or 'z') is
     guessed as the longer of Y and Z (garments are taller than deep); both guesses are logged and
-    stored in the metadata. Non-manifold edges, several components, degenerate faces or an empty
+    stored in the metadata (``metadata.origin``, a :class:`~datagen.garment.metadata.FileOrigin`). Non-manifold edges, several components, degenerate faces or an empty
     mesh are refused with what to do. ``remesh_edge_length`` (m) remeshes isotropically.
     """
     import trimesh
@@ -79,7 +80,8 @@ def load_garment_file(path: str | Path, *, units: str | None = None, up_axis: st
                          "(sew the panels, or load each piece on its own)")
     if remesh_edge_length:
         v, f = levelset.remesh(v, f, float(remesh_edge_length))
-    meta = {"type": "file", "source": str(path), "units": unit, "units_guessed": units is None, "up_axis": up,
-            "up_axis_guessed": up_axis is None, "remesh_edge_length": remesh_edge_length}
+    meta = GarmentMetadata(type="file", origin=FileOrigin(
+        source=str(path), units=unit, units_guessed=units is None, up_axis=up, up_axis_guessed=up_axis is None,
+        remesh_edge_length=None if remesh_edge_length is None else float(remesh_edge_length)))
     return GarmentMesh.create(v, f, uv=v[:, :2].copy(), vertex_region=np.zeros(len(v), dtype=np.int32),
                               region_names=("panel0",), material=material(material_name), metadata=meta)

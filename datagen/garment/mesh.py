@@ -1,17 +1,20 @@
-"""The :class:`GarmentMesh` type: a garment's rest mesh, labels, UVs, material and metadata."""
+"""The :class:`GarmentMesh` type: a garment's rest mesh, labels, UVs, material and metadata
+(:class:`~datagen.garment.metadata.GarmentMetadata`)."""
 
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
 
 from datagen.errors import InputError
+from datagen.garment.metadata import GarmentMetadata
+from datagen.garment.registry import GARMENT_TYPES, GarmentType
 from datagen.materials import Material
 
-__all__ = ["GarmentMesh", "boundary_loops", "load_garment"]
+__all__ = ["GarmentMesh", "GarmentMetadata", "boundary_loops", "load_garment"]
 
 
 def boundary_loops(faces: np.ndarray) -> list[np.ndarray]:
@@ -53,7 +56,9 @@ class GarmentMesh:
         seam_vertex: [V] bool, vertices on a seam between two panels.
         loops: named open boundaries: name -> vertex ids in order.
         material: the cloth material.
-        metadata: type, style parameters, seed, body β, counts, rest area, edge length, ...
+        metadata: a :class:`~datagen.garment.metadata.GarmentMetadata`: type, style parameters,
+            seed, body β, counts, rest area, edge length, waistband, ... (a mapping given here is
+            read by :meth:`GarmentMetadata.from_dict`, which refuses unknown keys).
         face_uv: material coordinates of every face corner [F, 3, 2] (m), all three in the chart
             of the face's panel, so every face has a valid (u, v) frame, also on seams and where
             a sleeve's chart wraps at its underarm seam; :meth:`material_frames` gives the
@@ -70,16 +75,22 @@ class GarmentMesh:
     seam_vertex: np.ndarray
     loops: dict[str, np.ndarray]
     material: Material
-    metadata: dict = field(default_factory=dict)
+    metadata: GarmentMetadata = field(default_factory=GarmentMetadata)
     face_uv: np.ndarray | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.metadata, GarmentMetadata):
+            object.__setattr__(self, "metadata", GarmentMetadata.from_dict(self.metadata))
 
     @classmethod
     def create(cls, vertices, faces, *, uv, vertex_region, region_names, material, metadata, face_uv=None,
                extra_seam=None) -> GarmentMesh:
         """Derive face regions, seams, named loops and counts, and build the garment.
 
-        ``face_uv`` [F, 3, 2] defaults to the vertices' UVs; ``extra_seam`` [V] marks seams that
-        are not panel borders (a sleeve's underarm seam)."""
+        ``metadata`` is a :class:`GarmentMetadata` (or its dict form) without the counts, which
+        are filled in here; its ``type``'s record names the openings. ``face_uv`` [F, 3, 2]
+        defaults to the vertices' UVs; ``extra_seam`` [V] marks seams that are not panel borders
+        (a sleeve's underarm seam)."""
         v = np.asarray(vertices, dtype=np.float64)
         f = np.asarray(faces, dtype=np.int64)
         vr = np.asarray(vertex_region, dtype=np.int32)
@@ -92,10 +103,12 @@ class GarmentMesh:
             seam[f[diff, b]] = True
         if extra_seam is not None:
             seam |= np.asarray(extra_seam, dtype=bool)
-        loops = _name_loops(v, boundary_loops(f), metadata.get("type"))
+        if not isinstance(metadata, GarmentMetadata):
+            metadata = GarmentMetadata.from_dict(metadata)
+        loops = _name_loops(v, boundary_loops(f), GARMENT_TYPES.get(metadata.type or ""))
         area = float(0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum())
-        meta = {**metadata, "vertex_count": len(v), "face_count": len(f), "rest_area_m2": area,
-                "boundary_loops": len(loops), "material": material.as_dict()}
+        meta = replace(metadata, vertex_count=len(v), face_count=len(f), rest_area_m2=area, boundary_loops=len(loops),
+                       material=material)
         return cls(vertices=v, faces=f, uv=np.asarray(uv, dtype=np.float64), vertex_region=vr, face_region=fr,
                    region_names=tuple(region_names), seam_vertex=seam, loops=loops, material=material, metadata=meta,
                    face_uv=np.asarray(uv, dtype=np.float64)[f] if face_uv is None else np.asarray(face_uv, dtype=np.float64))
@@ -131,13 +144,13 @@ class GarmentMesh:
 
     def weft_rest_scale(self) -> np.ndarray:
         """Rest length along the weft relative to the built mesh, per face [F]: below 1 on the
-        elastic waistband of a garment that hangs from the waist (``metadata["waistband"]``), 1
+        elastic waistband of a garment that hangs from the waist (``metadata.waistband``), 1
         elsewhere; the simulator shortens those faces' rest shape around the body."""
         scale = np.ones(len(self.faces))
-        band = self.metadata.get("waistband")
-        if band:
+        band = self.metadata.waistband
+        if band is not None:
             centroid_y = self.vertices[self.faces][:, :, 1].mean(1)
-            scale[centroid_y >= band["top"] - band["width"]] = band["weft_scale"]
+            scale[centroid_y >= band.top - band.width] = band.weft_scale
         return scale
 
     def save(self, path: str | Path) -> Path:
@@ -157,62 +170,62 @@ class GarmentMesh:
                          face_region=self.face_region, seam_vertex=self.seam_vertex,
                          region_names=np.array(json.dumps(list(self.region_names))),
                          material=np.array(json.dumps(self.material.as_dict())),
-                         metadata=np.array(json.dumps(self.metadata)), **loops)
+                         metadata=np.array(json.dumps(self.metadata.to_dict())), **loops)
         else:
             raise InputError(f"{path}: garment files are .obj, .ply or .npz (labels and metadata only in .npz)")
         return path
 
 
 def load_garment(path: str | Path) -> GarmentMesh:
-    """Read a garment written by :meth:`GarmentMesh.save` as ``.npz``."""
+    """Read a garment written by :meth:`GarmentMesh.save` as ``.npz`` (one without metadata reads
+    with empty metadata; metadata with keys :class:`GarmentMetadata` does not know is refused)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"garment file {path} does not exist")
     with np.load(path, allow_pickle=False) as d:
         loops = {k[5:]: d[k] for k in d.files if k.startswith("loop_")}
+        try:
+            meta = GarmentMetadata.from_dict(json.loads(str(d["metadata"]))) if "metadata" in d.files else GarmentMetadata()
+        except (InputError, ValueError) as e:
+            raise InputError(f"{path}: {e}") from None
         return GarmentMesh(vertices=d["vertices"], faces=d["faces"], uv=d["uv"], vertex_region=d["vertex_region"],
                            face_region=d["face_region"], region_names=tuple(json.loads(str(d["region_names"]))),
                            seam_vertex=d["seam_vertex"], loops=loops,
                            material=Material(**json.loads(str(d["material"]))),
-                           metadata=json.loads(str(d["metadata"])),
+                           metadata=meta,
                            face_uv=d["face_uv"] if "face_uv" in d.files else None)
 
 
-_SIDE_OPENING = {"tshirt": "cuff", "long_sleeve_shirt": "cuff", "jacket": "cuff", "coat": "cuff",
-                 "tank_top": "armhole", "dress": "armhole", "pants": "hem", "shorts": "hem"}
-"""What the openings left and right of the body's midline are, per garment type."""
+def _name_loops(v: np.ndarray, loops: list[np.ndarray], garment_type: GarmentType | None = None
+                ) -> dict[str, np.ndarray]:
+    """Name open boundaries by where they are and what the garment's type record says.
 
-
-def _name_loops(v: np.ndarray, loops: list[np.ndarray], kind: str | None = None) -> dict[str, np.ndarray]:
-    """Name open boundaries by where they are and what the garment is.
-
-    Openings off the midline (centre more than 6 cm from it) are ``left_``/``right_`` plus
-    ``cuff`` (sleeved tops), ``armhole`` (tank top, dress) or ``hem`` (pants, shorts). Of the
-    openings on the midline the highest is ``neck`` (tops) or ``waist`` (skirts, pants, shorts)
-    and the lowest ``hem`` (the ``neck`` of jackets and coats runs down the open front to the top
-    button); a jacket or coat with one midline opening (the front open down to the hem, garment
-    builder 7 and older) has ``neck_front_hem``. Garments of other origins (files) get
+    Openings off the midline (centre more than 6 cm from it) are ``left_``/``right_`` plus the
+    type's ``side_opening`` (``cuff`` of sleeved tops, ``armhole`` of sleeveless ones, ``hem`` of
+    separate legs). Of the openings on the midline the highest is the type's ``top_opening``
+    (``neck`` or ``waist``) and the lowest ``hem`` (the ``neck`` of a type with an open front runs
+    down the front to the top button); a type with separate legs has one midline opening, its top
+    one; an open-front type with one midline opening (the front open down to the hem, garment
+    builder 7 and older) has ``neck_front_hem``. Garments of other origins (files, no record) get
     ``top_opening``, ``hem``, ``left_opening``, ``right_opening`` and ``opening`` by position.
     """
     if not loops:
         return {}
+    t = garment_type
     centres = np.array([v[lp].mean(0) for lp in loops])
-    known = kind in _SIDE_OPENING or kind in ("skirt", "flared_skirt")
-    side_word = _SIDE_OPENING.get(kind or "")
+    side_word = None if t is None or t.side_opening == "none" else t.side_opening
     side_limit = 0.06 if side_word else 0.12
-    top_word = "waist" if kind in ("skirt", "flared_skirt", "pants", "shorts") else "neck"
+    top_word = "top_opening" if t is None else t.top_opening
     out: dict[str, np.ndarray] = {}
     mid = [i for i in range(len(loops)) if abs(centres[i, 0]) <= side_limit]
     for i in sorted(range(len(loops)), key=lambda i: -abs(centres[i, 0])):
         c = centres[i]
         if abs(c[0]) > side_limit:
             name = ("left_" if c[0] > 0 else "right_") + (side_word or "opening")
-        elif kind in ("jacket", "coat") and len(mid) == 1:
+        elif t is not None and t.open_front and len(mid) == 1:
             name = "neck_front_hem"
-        elif kind in ("pants", "shorts") and c[1] == centres[mid, 1].max():
-            name = "waist"
-        elif c[1] == centres[mid, 1].max() and len(mid) > 1:
-            name = top_word if known else "top_opening"
+        elif c[1] == centres[mid, 1].max() and (len(mid) > 1 or (t is not None and t.separate_legs)):
+            name = top_word
         elif c[1] == centres[mid, 1].min():
             name = "hem"
         else:

@@ -5,6 +5,13 @@ Every type is a level set around the body (:mod:`datagen.garment.levelset`): a c
 leave the body (skirts, dresses, coats), and cuts that open the neck, armholes or sleeve ends,
 waist, hems and, for jackets and coats, the front. All lengths are in metres and measured from
 the body's own joints, so one parameter set fits every body shape.
+
+What a type is lives in its record (:class:`~datagen.garment.registry.GarmentType`, in
+:data:`GARMENT_TYPES`): the construction reads the record's silhouette fields (hangs from the
+shoulders or the waist, sleeves, skirt, separate legs, open front, hem measured from, panels), never
+the type's name or the names of its parameters. Adding a type = one record in
+:mod:`datagen.garment.registry` (and its code in ``schemas/garment_types.py``) plus, for a piece no
+type has yet, its geometry in :func:`_design`.
 """
 
 from __future__ import annotations
@@ -19,9 +26,12 @@ from datagen.errors import InputError
 from datagen.garment import levelset
 from datagen.materials import Material, material
 from datagen.garment.mesh import GarmentMesh
+from datagen.garment.metadata import GarmentMetadata, Waistband
+from datagen.garment.registry import GARMENT_TYPES, GarmentType, garment_type
 from datagen.params import ParamSpec, draw_params
 
-__all__ = ["GARMENT_TYPES", "MAX_VERTICES", "MIN_CLEARANCE", "ParamSpec", "garment_params", "make_garment"]
+__all__ = ["GARMENT_TYPES", "GarmentType", "MAX_VERTICES", "MIN_CLEARANCE", "ParamSpec", "default_edge_length",
+           "garment_params", "make_garment"]
 
 log = logging.getLogger(__name__)
 
@@ -38,100 +48,18 @@ MAX_VERTICES = 200_000
 BUILDER_VERSION = 8
 
 
-_TOP = {
-    "ease_chest": ParamSpec(0.015, 0.05, "clearance at the chest (m)"),
-    "ease_waist": ParamSpec(0.015, 0.06, "clearance at the waist (m)"),
-    "ease_hip": ParamSpec(0.015, 0.05, "clearance at the hips (m)"),
-    "hem": ParamSpec(0.0, 0.12, "hem below the hip joints (m; kept 1.5 cm above the crotch)"),
-    "neck_drop": ParamSpec(0.0, 0.03, "neckline lowered all round (m)"),
-    "neck_width": ParamSpec(0.0, 0.03, "neck opening wider than the neck and its clearance (m)"),
-    "neck_depth": ParamSpec(0.0, 0.09, "extra depth of the neckline at the front (m)"),
-}
-_SLEEVE = {
-    "sleeve_length": ParamSpec(0.1, 0.25, "sleeve from the shoulder joint (m)"),
-    "cuff_ease": ParamSpec(0.015, 0.045, "clearance at the cuff (m)"),
-}
-_SKIRT = {
-    "flare": ParamSpec(0.0, 0.35, "widening of the skirt per metre below the hips"),
-}
-
-SKIRTS = ("skirt", "flared_skirt")
-"""Types that are a skirt alone: a waist and a hem opening, front and back panels."""
-
-GARMENT_TYPES: dict[str, dict] = {
-    "tshirt": {"params": {**_TOP, **_SLEEVE}, "material": "jersey", "loops": 4, "edge": 0.018},
-    "long_sleeve_shirt": {"params": {**_TOP, **_SLEEVE,
-                                     "sleeve_length": ParamSpec(0.38, 0.47, "sleeve from the shoulder joint (m)")},
-                          "material": "cotton", "loops": 4},
-    "tank_top": {"params": {**_TOP, "armhole_drop": ParamSpec(0.02, 0.07, "armhole below the armpit line (m)")},
-                 "material": "jersey", "loops": 4, "edge": 0.016},
-    "jacket": {"params": {**_TOP, **_SLEEVE,
-                          "ease_chest": ParamSpec(0.035, 0.07, "clearance at the chest (m)"),
-                          "ease_waist": ParamSpec(0.04, 0.08, "clearance at the waist (m)"),
-                          "ease_hip": ParamSpec(0.035, 0.07, "clearance at the hips (m)"),
-                          "sleeve_length": ParamSpec(0.4, 0.47, "sleeve from the shoulder joint (m)"),
-                          "opening": ParamSpec(0.04, 0.12, "width of the open front (m)"),
-                          "lapel_depth": ParamSpec(0.12, 0.22, "open front from the front neckline down to the "
-                                                               "top button (m); closed below it")},
-               "material": "denim", "loops": 4},
-    "coat": {"params": {**_TOP, **_SLEEVE, **_SKIRT,
-                        "ease_chest": ParamSpec(0.04, 0.07, "clearance at the chest (m)"),
-                        "ease_waist": ParamSpec(0.045, 0.08, "clearance at the waist (m)"),
-                        "ease_hip": ParamSpec(0.04, 0.07, "clearance at the hips (m)"),
-                        "sleeve_length": ParamSpec(0.28, 0.36, "3/4 sleeve from the shoulder joint (m)"),
-                        "hem": ParamSpec(0.35, 0.5, "hem below the hip joints (m), about the knee"),
-                        "flare": ParamSpec(0.05, 0.2, "widening per metre below the hips"),
-                        "opening": ParamSpec(0.04, 0.12, "width of the open front (m)"),
-                        "lapel_depth": ParamSpec(0.12, 0.22, "open front from the front neckline down to the top "
-                                                             "button (m); closed below it")},
-             "material": "wool", "loops": 4},
-    "dress": {"params": {**_TOP, **_SKIRT,
-                         "armhole_drop": ParamSpec(0.02, 0.06, "armhole below the armpit line (m)"),
-                         "hem": ParamSpec(0.25, 0.5, "hem below the hip joints (m)")},
-              "material": "silk", "loops": 4},
-    "skirt": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                         "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
-                         "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
-                         "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"),
-                         "flare": ParamSpec(0.0, 0.06, "widening per metre below the hips (straight cut)")},
-              "material": "cotton", "loops": 2, "edge": 0.013},
-    "flared_skirt": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                                "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
-                                "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
-                                "hem": ParamSpec(0.2, 0.4, "hem below the hip joints (m)"),
-                                "flare": ParamSpec(0.3, 0.7, "widening per metre below the hips (A-line to circle)")},
-                     "material": "silk", "loops": 2, "edge": 0.015},
-    "pants": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                         "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
-                         "leg_ease": ParamSpec(0.015, 0.04, "clearance around the thigh (m)"),
-                         "hem_ease": ParamSpec(0.02, 0.06, "clearance at the hem (m)"),
-                         "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
-                         "hem": ParamSpec(0.02, 0.1, "hem above the ankle joints (m)")},
-              "material": "denim", "loops": 3},
-    "shorts": {"params": {"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                          "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
-                          "leg_ease": ParamSpec(0.02, 0.05, "clearance around the thigh (m)"),
-                          "hem_ease": ParamSpec(0.025, 0.06, "clearance at the hem (m)"),
-                          "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
-                          "hem": ParamSpec(0.25, 0.36, "hem below the hip joints (m)")},
-               "material": "cotton", "loops": 3, "edge": 0.015},
-}
-"""Every garment type: its style parameters, default material, number of boundary loops and
-default edge length (``edge``, m; 0.02 where absent), chosen so every type has 2,000-8,000
-vertices by default."""
-
-
 def default_edge_length(kind: str) -> float:
     """The remeshing target of ``kind`` when none is given [m]."""
-    return float(GARMENT_TYPES[kind].get("edge", 0.02))
+    return float(garment_type(kind).edge_length)
 
 
 def garment_params(kind: str, seed: int, overrides: dict | None = None) -> dict[str, float]:
-    """Style parameters of ``kind`` drawn by ``seed``, with ``overrides`` applied (range-checked)."""
-    if kind not in GARMENT_TYPES:
-        raise InputError(f"unknown garment type {kind!r}; types: {', '.join(GARMENT_TYPES)}")
-    return draw_params(GARMENT_TYPES[kind]["params"], seed, (list(GARMENT_TYPES).index(kind), 104729), repr(kind),
-                       overrides)
+    """Style parameters of ``kind`` drawn by ``seed``, with ``overrides`` applied (range-checked).
+
+    The draw is seeded by ``(seed, code, 104729)`` with the type's frozen code, so it does not
+    depend on where the type's record sits in :data:`GARMENT_TYPES`."""
+    t = garment_type(kind)
+    return draw_params(t.params, seed, (t.code, 104729), repr(kind), overrides)
 
 
 @dataclass
@@ -176,9 +104,9 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
             surface, which is smooth at that scale), finer for finer meshes.
     """
     t0 = time.perf_counter()
+    spec = garment_type(kind)
     p = garment_params(kind, seed, params)
-    spec = GARMENT_TYPES[kind]
-    mat = material(material_name or spec["material"])
+    mat = material(material_name or spec.material)
     if target_edge_length is None:
         target_edge_length = default_edge_length(kind)
     if not (np.isfinite(target_edge_length) and target_edge_length > 0):
@@ -186,8 +114,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
     verts = np.asarray(body_model.shaped(betas))[0]
     body = _Body(verts=verts, faces=np.asarray(body_model.faces), joints=np.asarray(body_model.rest_joints(betas))[0])
-    area_guess = {"tshirt": 1.1, "long_sleeve_shirt": 1.3, "tank_top": 0.8, "jacket": 1.6, "coat": 2.4,
-                  "dress": 1.8, "skirt": 0.8, "flared_skirt": 1.0, "pants": 1.5, "shorts": 0.8}[kind]
+    area_guess = spec.area_guess
     est_vertices = int(area_guess / (np.sqrt(3) / 4 * target_edge_length**2) / 2)
     if est_vertices > MAX_VERTICES:
         smallest = np.sqrt(area_guess / (2 * MAX_VERTICES * np.sqrt(3) / 4))
@@ -195,7 +122,7 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
                          f"(~{est_vertices * 2 * 3 * 8 * 40 / 1e9:.1f} GB to simulate); the smallest allowed is "
                          f"{smallest:.4f} m ({MAX_VERTICES:,} vertices)")
     h = grid_spacing or min(0.01, max(target_edge_length / 1.3, 0.004))
-    field, keep, lo, hi, regions, waist_top = _design(kind, p, body, h)
+    field, keep, lo, hi, regions, waist_top = _design(spec, p, body, h)
     rough_v, rough_f = levelset.extract_surface(field, lo, hi, h)
     # remesh the closed surface first, so the cut meets edges of the target length and leaves a
     # boundary spaced like the rest; then cut, and remesh again to even out the cut's neighbourhood
@@ -214,10 +141,9 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     waistband = None if waist_top is None else _waistband(v, body, waist_top)
     uv, face_uv, wrap_seam = _panel_uvs(v, f, vertex_region, region_names, chart)
     seconds = time.perf_counter() - t0
-    meta = {"type": kind, "params": p, "seed": int(seed), "betas": betas.tolist(), "target_edge_length": target_edge_length,
-            "expected_boundary_loops": spec["loops"], "builder_version": BUILDER_VERSION, "build_seconds": seconds}
-    if waistband is not None:
-        meta["waistband"] = waistband
+    meta = GarmentMetadata(type=kind, params=p, seed=int(seed), betas=betas.tolist(),
+                           target_edge_length=target_edge_length, expected_boundary_loops=spec.boundary_loops,
+                           builder_version=BUILDER_VERSION, build_seconds=seconds, waistband=waistband)
     return GarmentMesh.create(v, f, uv=uv, vertex_region=vertex_region, region_names=region_names, material=mat,
                               metadata=meta, face_uv=face_uv, extra_seam=wrap_seam)
 
@@ -243,7 +169,7 @@ def _hull_perimeter(points_xz: np.ndarray) -> float:
     return float(np.linalg.norm(hull - np.roll(hull, 1, axis=0), axis=1).sum())
 
 
-def _waistband(v: np.ndarray, body: _Body, top: float) -> dict:
+def _waistband(v: np.ndarray, body: _Body, top: float) -> Waistband:
     """The elastic band of a garment that hangs from the waist: its faces are those within
     :data:`WAISTBAND_WIDTH` below ``top``, their rest length along the weft (around the body) is
     ``weft_scale`` times the built one (a shrinkage, as cloth tools call it).
@@ -264,9 +190,9 @@ def _waistband(v: np.ndarray, body: _Body, top: float) -> dict:
         raise InputError(f"the waistband below {top:.3f} m meets too few body ({len(bv)}) or garment ({len(gv)}) "
                          "vertices to measure its girth: the garment's waist parameter puts it off the body")
     girth_body, girth_garment = _hull_perimeter(bv[:, [0, 2]]), _hull_perimeter(gv[:, [0, 2]])
-    return {"top": float(top), "width": WAISTBAND_WIDTH, "weft_scale": float(min(1.0, WAISTBAND_GRIP * girth_body /
-                                                                                  girth_garment)),
-            "girth_body": girth_body, "girth_garment": girth_garment}
+    return Waistband(top=float(top), width=WAISTBAND_WIDTH,
+                     weft_scale=float(min(1.0, WAISTBAND_GRIP * girth_body / girth_garment)),
+                     girth_body=girth_body, girth_garment=girth_garment)
 
 
 def _panel_uvs(v: np.ndarray, f: np.ndarray, vertex_region: np.ndarray, names, chart):
@@ -316,9 +242,10 @@ def _panel_uvs(v: np.ndarray, f: np.ndarray, vertex_region: np.ndarray, names, c
     return uv, face_uv, seam
 
 
-def _design(kind: str, p: dict, body: _Body, spacing: float):
-    """The implicit field, the keep (cut) field, the grid box, the region labeller of a garment
-    and the height of its waist opening (None for a top, which hangs from the shoulders)."""
+def _design(spec: GarmentType, p: dict, body: _Body, spacing: float):
+    """The implicit field, the keep (cut) field, the grid box, the region labeller of a garment of
+    type ``spec`` with style parameters ``p`` and the height of its waist opening (None for a top,
+    which hangs from the shoulders). The pieces come from the record's fields."""
     sh = body.j("left_shoulder")
     neck = body.j("neck")
     chest_y = body.j("spine3")[1]
@@ -326,9 +253,11 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
     hip_y = body.j("left_hip")[1]
     knee_y = body.j("left_knee")[1]
     ankle_y = body.j("left_ankle")[1]
-    top = kind in ("tshirt", "long_sleeve_shirt", "tank_top", "jacket", "coat", "dress")
-    sleeve = "sleeve_length" in p
-    cone = "flare" in p
+    top = spec.hangs_from == "shoulders"
+    sleeve = spec.sleeves
+    cone = spec.skirt
+    legs = spec.separate_legs
+    from_ankles = spec.hem_from == "ankles"
     hw, hd, hzc = body.half_extent(hip_y - 0.03)
     nw, nd, _ = body.half_extent(neck[1], band=0.01)
     if top:
@@ -354,8 +283,8 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
             e = np.minimum(e, _interp(y, [chest_y, sh[1]], [p["ease_chest"], SHOULDER_CLEARANCE]))
         else:
             e = _interp(y, [waist_y, hip_y], [p["ease_waist"], p["ease_hip"]])
-            if "leg_ease" in p:
-                hem_y = (ankle_y + p["hem"]) if kind == "pants" else (hip_y - p["hem"])
+            if legs:
+                hem_y = (ankle_y + p["hem"]) if from_ankles else (hip_y - p["hem"])
                 u = np.clip((hip_y - 0.08 - y) / max(hip_y - 0.08 - hem_y, 1e-3), 0.0, 1.0)
                 e = np.where(y < hip_y - 0.08, (1 - u) * p["leg_ease"] + u * p["hem_ease"], e)
         return np.maximum(e, MIN_CLEARANCE)
@@ -365,7 +294,7 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
         x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
         below = np.clip(hip_y - y, 0.0, None)
         above = np.clip(y - hip_y, 0.0, None)
-        e = p.get("ease_hip", 0.03)
+        e = p["ease_hip"]
         a = hw + e + p["flare"] * below - 1.5 * above
         b = hd + e + p["flare"] * below - 1.5 * above
         a, b = np.maximum(a, 0.02), np.maximum(b, 0.02)
@@ -382,7 +311,7 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
         f = levelset.body_sdf(body.verts, body.faces, pts) - ease(pts)
         if cone:
             f = levelset.smin(f, cone_field(pts), 0.03)
-        if "leg_ease" in p:
+        if legs:
             # from below the garment's own crotch (the body's crotch less the clearance)
             below = np.clip(crotch_y - p["ease_hip"] - 0.015 - pts[:, 1], 0.0, None)
             slot = np.minimum(0.6 * spacing, below) - np.abs(pts[:, 0])
@@ -390,14 +319,9 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
         return f
 
     # --- cuts (keep > 0)
-    if top:
-        hem_y = hip_y - p["hem"]
-    elif kind == "pants":
-        hem_y = ankle_y + p["hem"]
-    else:
-        hem_y = hip_y - p["hem"]
-    if kind in SKIRTS and hem_y < knee_y - 0.12:
-        hem_y = knee_y - 0.12
+    hem_y = (ankle_y + p["hem"]) if from_ankles else (hip_y - p["hem"])
+    if spec.hem_floor_below_knee is not None and hem_y < knee_y - spec.hem_floor_below_knee:
+        hem_y = knee_y - spec.hem_floor_below_knee
     if top and not cone:
         # a top without a skirt part ends above the crotch: below it the clearance around the
         # legs splits in two and the hem would become two openings (thin bodies, long hems)
@@ -419,7 +343,7 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
             else:  # armholes: the arm, the shoulder tip and the side wall down to the armhole line
                 armpit = sh[1] - 0.07 - p["armhole_drop"]
                 cuts.append(np.maximum((sh[0] - 0.02) - np.abs(x), armpit - y))
-            if "opening" in p:
+            if spec.open_front:
                 # at least 2 grid steps either side of the mid-plane: a narrower slot is not
                 # resolved by marching cubes everywhere and a bridge of cloth closes the front.
                 # The front is open from the neckline down to the top button and closed below:
@@ -433,7 +357,7 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
         return np.minimum.reduce(cuts)
 
     # --- grid box
-    xr = (sh[0] + p.get("sleeve_length", 0.0) + 0.08) if (top and sleeve) else (hw + 0.3 if cone else sh[0] + 0.12)
+    xr = (sh[0] + p["sleeve_length"] + 0.08) if (top and sleeve) else (hw + 0.3 if cone else sh[0] + 0.12)
     top_y = neck[1] + 0.12 if top else waist_y + 0.05
     bottom_y = hem_y - 0.05
     lo = np.array([-xr, bottom_y, body.verts[:, 2].min() - 0.12 - (0.15 if cone else 0.0)])
@@ -467,13 +391,13 @@ def _design(kind: str, p: dict, body: _Body, spacing: float):
 
     def regions(v):
         x, y, z = v[:, 0], v[:, 1], v[:, 2]
-        if top:
+        if spec.panels == "top":
             names = ["front", "back", "left_sleeve", "right_sleeve"]
             reg = np.where(z > hzc, 0, 1)
             arm = (np.abs(x) > sh[0] + 0.03) & (y > sh[1] - 0.12)
             if sleeve:
                 reg = np.where(arm & (x > 0), 2, np.where(arm & (x < 0), 3, reg))
-        elif kind in SKIRTS:
+        elif spec.panels == "skirt":
             names = ["front", "back"]
             reg = np.where(z > hzc, 0, 1)
         else:

@@ -118,7 +118,7 @@ class Plan:
 def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
     """group -> (arrays, names) for every static group of the store."""
     from datagen.materials import MATERIALS
-    from datagen.garment.types import GARMENT_TYPES
+    from datagen.garment.registry import garment_type, garment_type_names
     from datagen.motion.labels import LABELS
     from datagen.targets import fit_attribute, fit_attribute_model, fit_pair
 
@@ -160,19 +160,20 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
             np.int32),
         "skin_weights": np.concatenate([plan.correspondence(g)["skin_weights"] for g in range(len(garments))]).astype(
             f32),
-        "type": np.array([list(GARMENT_TYPES).index(parse_garment(i[0])[0]) for i in plan.instances], np.int32),
+        "type": np.array([garment_type(parse_garment(i[0])[0]).code for i in plan.instances], np.int32),
         "seed": np.array([parse_garment(i[0])[1] for i in plan.instances], np.int32),
         "body": np.array([plan.bodies.index(i[1]) for i in plan.instances], np.int32),
         "material": np.array([materials.index(g.material.name) for g in garments], np.int32),
         "alpha": alpha,
-        "rest_area": np.array([g.metadata.get("rest_area", _area(g.vertices, g.faces)) for g in garments], f32),
+        "rest_area": np.array([_area(g.vertices, g.faces) if g.metadata.rest_area_m2 is None else g.metadata.rest_area_m2
+                               for g in garments], f32),
     }
     fa = fit.as_arrays()
     return {
         "body": (body, None),
         "bodies": ({"betas": plan.betas.astype(f32)}, {"body_names": list(plan.bodies)}),
         "motions": (motion_arrays, {"label_names": list(LABELS)}),
-        "garments": (garment_arrays, {"garment_type_names": list(GARMENT_TYPES), "material_names": materials,
+        "garments": (garment_arrays, {"garment_type_names": garment_type_names(), "material_names": materials,
                                       "region_names": regions}),
         "fit": ({"components": fa["components"].astype(f32), "mean": fa["mean"].astype(f32),
                  "noise_variance": fa["noise_variance"].astype(f32), "subsample": fa["subsample"]}, None),

@@ -34,11 +34,12 @@ def test_every_type_builds_and_passes_every_check(garments, default_body):
         assert c["min_clearance"] >= 0.005, kind
         assert c["outward_area_fraction"] > 0.95, kind
         assert c["edge_spread"] < 0.25 and c["angle_p1_deg"] > 25.0, kind
-        assert len(g.loops) == GARMENT_TYPES[kind]["loops"] == g.metadata["boundary_loops"]
+        assert len(g.loops) == GARMENT_TYPES[kind].boundary_loops == g.metadata.boundary_loops
         assert set(g.loops) == set(LOOP_NAMES[kind].split()), (kind, sorted(g.loops))
         assert g.vertex_region.shape == (g.vertex_count,) and g.uv.shape == (g.vertex_count, 2)
         assert g.seam_vertex.any() and not g.seam_vertex.all()
-        assert g.metadata["type"] == kind and g.metadata["rest_area_m2"] > 0.2
+        assert g.metadata.type == kind and g.metadata.rest_area_m2 > 0.2
+        assert (g.metadata.waistband is None) == (GARMENT_TYPES[kind].hangs_from == "shoulders")
         # material frames: per-corner UVs in metres, not mirrored; weft horizontal on the trunk and
         # legs and around the arm on sleeves; warp perpendicular to it in the face
         fu = g.face_uv
@@ -90,7 +91,7 @@ def test_deterministic_and_seeded(garments, default_body):
     again = make_garment("skirt", default_body, seed=3)
     np.testing.assert_array_equal(again.vertices, garments["skirt"].vertices)
     other = make_garment("skirt", default_body, seed=4)
-    assert other.metadata["params"] != again.metadata["params"]
+    assert other.metadata.params != again.metadata.params
 
 
 def test_bad_input_says_what_is_allowed(default_body):
@@ -104,7 +105,7 @@ def test_bad_input_says_what_is_allowed(default_body):
         material("leather")
     for k, v in GARMENT_TYPES.items():
         p = garment_params(k, 0)
-        assert all(v["params"][n].low <= p[n] <= v["params"][n].high for n in p)
+        assert all(v.params[n].low <= p[n] <= v.params[n].high for n in p)
 
 
 def test_materials_are_si_and_ordered():
@@ -132,7 +133,9 @@ def test_npz_round_trip_and_obj(garments, tmp_path):
     np.testing.assert_array_equal(back.vertex_region, g.vertex_region)
     np.testing.assert_array_equal(back.face_uv, g.face_uv)
     assert back.region_names == g.region_names and back.material == g.material
-    assert set(back.loops) == set(g.loops) and back.metadata["type"] == "pants"
+    assert set(back.loops) == set(g.loops) and back.metadata.type == "pants"
+    assert back.metadata == g.metadata  # every field, the waistband and material included
+    np.testing.assert_array_equal(back.weft_rest_scale(), g.weft_rest_scale())
     import trimesh
 
     obj = trimesh.load(g.save(tmp_path / "pants.obj"), process=False)
@@ -162,7 +165,10 @@ def test_file_garment_units_and_up_axis_guessed(garments, tmp_path):
     from datagen.garment.files import load_garment_file
 
     back = load_garment_file(tmp_path / "skirt_cm.obj")
-    assert back.metadata["units"] == "cm" and back.metadata["up_axis"] == "z"
+    assert back.metadata.origin.units == "cm" and back.metadata.origin.up_axis == "z"
+    assert back.metadata.origin.units_guessed and back.metadata.params == {} and back.metadata.seed is None
+    assert back.metadata.vertex_count == len(back.vertices) and back.metadata.waistband is None
+    np.testing.assert_array_equal(back.weft_rest_scale(), 1.0)
     np.testing.assert_allclose(back.vertices, g.vertices, atol=1e-6)
     assert len(back.loops) == 2
 
@@ -176,7 +182,7 @@ def test_file_garment_from_gltf(garments, tmp_path):
     g = garments["skirt"]
     trimesh.Trimesh(g.vertices, g.faces, process=False).export(tmp_path / "skirt.glb")
     back = load_garment_file(tmp_path / "skirt.glb")
-    assert back.metadata["units"] == "m" and back.metadata["up_axis"] == "y"
+    assert back.metadata.origin.units == "m" and back.metadata.origin.up_axis == "y"
     np.testing.assert_allclose(back.vertices, g.vertices, atol=1e-6)
     np.testing.assert_array_equal(back.faces, g.faces)
     assert len(back.loops) == 2

@@ -291,7 +291,7 @@ def test_even_subsample_is_deterministic_and_even(tshirt):
     # apart; the greedy pick keeps at least 0.6 of that, a random pick is as close as the mesh's
     # shortest edge (the garment builder keeps that at half the target edge length, so the ratio
     # to a random pick depends on the mesh and is not what is tested)
-    ideal = np.sqrt(tshirt.metadata["rest_area_m2"] / count)
+    ideal = np.sqrt(tshirt.metadata.rest_area_m2 / count)
     random_pick = np.random.default_rng(0).choice(V, count, replace=False)
     assert spacing(a) > 0.6 * ideal and spacing(a) > 1.3 * spacing(random_pick)
     gap, _ = cKDTree(tshirt.vertices[a]).query(tshirt.vertices)  # every vertex has a chosen one nearby
