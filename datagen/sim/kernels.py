@@ -7,7 +7,8 @@ Energies (per element, SI units; see ``docs/simulator.md``):
 
 - membrane: orthotropic St. Venant-Kirchhoff on each triangle in its material frame (weft u, warp
   v): ``A [k_u/2 G_uu² + k_v/2 G_vv² + k_uv G_uu G_vv + 2 k_s G_uv²]`` with the Green strain
-  ``G = (FᵀF - I)/2``, stiffnesses in N/m, ``k_uv = ν sqrt(k_u k_v)``;
+  ``G = (FᵀF - I)/2``, stiffnesses in N/m, ``k_uv = ν sqrt(k_u k_v)``, A the triangle's rest area
+  (of its reference shape, ``tri_area`` = |det Dm|/2: the energy is an integral over the rest shape);
 - bending: discrete shells (Grinspun et al. 2003) on each interior edge,
   ``k_b/2 · 3|ē|²/(Ā₁+Ā₂) · (θ - θ̄)²`` with the rest angle θ̄ of the rest shape, k_b in N·m;
 - inertia ``m/(2h²)|x - y|²`` with ``y = x₀ + h v₀ + h² (g - c_air v₀ / ρ)``;

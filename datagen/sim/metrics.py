@@ -114,23 +114,23 @@ class Metrics:
             self._lo, self._hi = wp.zeros(m.face_count, dtype=wp.vec3), wp.zeros(m.face_count, dtype=wp.vec3)
             wp.launch(face_bounds, m.face_count, inputs=[m.rest_positions, m.faces, self._lo, self._hi])
             self._bvh = wp.Bvh(self._lo, self._hi, groups=wp.array(
-                h["particle_scene"][h["faces"][:, 0]].astype(np.int32), dtype=wp.int32))
+                h.particle_scene[h.faces[:, 0]].astype(np.int32), dtype=wp.int32))
         h = m.host
-        self._scene = h["particle_scene"]
-        self._face_scene = self._scene[h["faces"][:, 0]]
-        self._edge_scene = self._scene[h["edges"][:, 0]]
+        self._scene = h.particle_scene
+        self._face_scene = self._scene[h.faces[:, 0]]
+        self._edge_scene = self._scene[h.edges[:, 0]]
         self._counts = np.bincount(self._scene, minlength=m.scene_count)
         # slip: each vertex's closest body vertex at rest (its scene's body), and the top band
         from scipy.spatial import cKDTree
 
-        X = h["rest_positions"]
+        X = h.rest_positions
         anchor, rest_d = np.zeros(len(X), dtype=np.int32), np.zeros(len(X))
         self._band = np.zeros(len(X), dtype=bool)
-        for s, (p0, p1) in enumerate(h["particle_range"]):
-            if s in h["scenes_without_body"]:
+        for s, (p0, p1) in enumerate(h.particle_range):
+            if s in m.scenes_without_body:
                 continue  # no body to slip off (its slip is 0)
-            b0, b1 = h["body_ranges"][s]
-            rest_d[p0:p1], a = cKDTree(h["body_rest"][b0:b1]).query(X[p0:p1])
+            b0, b1 = h.body_ranges[s]
+            rest_d[p0:p1], a = cKDTree(h.body_rest[b0:b1]).query(X[p0:p1])
             anchor[p0:p1] = a + b0
             self._band[p0:p1] = X[p0:p1, 1] > X[p0:p1, 1].max() - SLIP_BAND
         self._band_count = np.bincount(self._scene, weights=self._band, minlength=m.scene_count)
@@ -153,17 +153,17 @@ class Metrics:
         x = x_wp.numpy().astype(np.float64)
         v = state.velocities.numpy().astype(np.float64)
         depth = self._depth.numpy()
-        F = h["faces"]
-        D = h["dm_inv"]
+        F = h.faces
+        D = h.dm_inv
         e1, e2 = x[F[:, 1]] - x[F[:, 0]], x[F[:, 2]] - x[F[:, 0]]
         f0 = e1 * D[:, 0, 0, None] + e2 * D[:, 1, 0, None]
         f1 = e1 * D[:, 0, 1, None] + e2 * D[:, 1, 1, None]
         a, b, c = (f0 * f0).sum(1), (f1 * f1).sum(1), (f0 * f1).sum(1)
         lam_max = np.sqrt(np.maximum(0.5 * (a + b) + np.sqrt(0.25 * (a - b) ** 2 + c * c), 0.0))
         stretch = lam_max - 1.0
-        ke = 0.5 * h["mass"] * (v * v).sum(1)
+        ke = 0.5 * h.mass * (v * v).sum(1)
         bad = ~np.isfinite(x).all(1)
-        area = h["tri_area"]
+        area = h.tri_area
         out = {
             "stretch_max": np.full(S, -np.inf), "stretch_mean": np.zeros(S),
             "penetration_count": np.bincount(self._scene, weights=depth > 0, minlength=S).astype(np.int64),

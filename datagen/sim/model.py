@@ -1,9 +1,12 @@
 """The cloth model: what does not change during a run, for one scene or a batch of scenes.
 
 ``ClothModelBuilder.add_cloth(...)`` adds one garment (a triangle mesh with its material) to a
-scene with its own body; ``finalize(device)`` concatenates every scene into flat warp arrays:
-rest geometry, per-triangle material frames and stiffnesses, hinge edges, vertex adjacency and a
-graph colouring for the vertex block descent solver. Scenes share no vertex, edge or contact;
+scene with its own body; ``finalize(device)`` concatenates every scene into flat arrays, in named
+parts: the membrane (rest shape matrices in the material frame, stiffnesses, lock, rest area,
+mass), the bending hinges (rest angles, stiffnesses), the bodies (colliders, their parts, per-scene
+ranges), the topology (vertex adjacency and a graph colouring for the vertex block descent solver),
+all in numpy (:class:`ClothHostArrays`), then uploads them to warp (:class:`ClothModel`).
+Scenes share no vertex, edge or contact;
 each scene's vertices, faces and edges are contiguous, each scene has its own collision
 structures and its own colouring (merged by colour index), so a scene's result does not depend
 on what else is in its batch.
@@ -11,12 +14,16 @@ on what else is in its batch.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from datagen.errors import InputError
 from datagen.materials import Material, material
+
+if TYPE_CHECKING:
+    import warp as wp
 
 
 @dataclass
@@ -30,35 +37,266 @@ class _ClothPart:
     weft_scale: np.ndarray | None = None
 
 
-@dataclass
-class ClothModel:
-    """Flat arrays of every scene's cloth (numpy copies in ``host``, warp arrays as attributes).
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ClothHostArrays:
+    """The model as built, in numpy (float64 and int64): the one source of every array that
+    :class:`ClothModel` holds on its device (same names, uploaded as float32 and int32), plus the
+    per-scene ranges. N = particle_count, F = face_count, E = edge_count, S = scene_count,
+    B = body_vertex_count, Fb = body faces, P = body_part_count."""
 
-    Attributes (warp arrays on ``device``):
-        rest_positions: rest shape [m], shape [particle_count, 3].
-        mass: vertex mass [kg] (a third of each adjacent triangle's area x areal density).
-        vertex_area: vertex area [m²] (for air drag).
-        active: 1 for simulated vertices, 0 for pinned ones.
-        particle_scene: scene index per vertex.
-        faces: triangles [face_count, 3] (global vertex ids).
-        dm_inv: inverse rest shape matrix of every triangle in its material frame [1/m] (the
-            built shape, its weft row scaled by the face's ``weft_scale``).
-        tri_area: rest area [m²] (the built area times ``weft_scale``; mass is the built area's).
-        tri_stiff: (k_u, k_v, k_uv, k_s) [N/m] per triangle.
-        tri_lock: (1 + lock strain [-], lock stiffness [N/m]) per triangle (the material's lock).
-        edges: [edge_count, 4]: hinge (0, 1) and opposite corners (2, 3; -1 on a boundary).
-        rest_angle: rest dihedral angle [rad]; bend_k: 3 k_b |ē|²/(Ā₁+Ā₂) [N·m].
-        colours: vertex ids per colour (no two vertices of one colour share a triangle or hinge).
+    # cloth vertices
+    rest_positions: np.ndarray
+    """Rest (and start) positions [m], [N, 3]."""
+    mass: np.ndarray
+    """Vertex mass [kg], [N]: a third of each adjacent face's built area x areal density."""
+    vertex_area: np.ndarray
+    """Vertex area [m²], [N]: a third of each adjacent face's built area (air drag, friction)."""
+    active: np.ndarray
+    """1 for a simulated vertex, 0 for a pinned one, [N]."""
+    particle_scene: np.ndarray
+    """Scene of every vertex, [N] (ascending: each scene's vertices contiguous)."""
+    damping: np.ndarray
+    """Stiffness-proportional damping of the vertex's material [s], [N]."""
+    friction: np.ndarray
+    """Coulomb friction coefficient of the vertex's material [-], [N]."""
+    thickness: np.ndarray
+    """Material thickness [m], [N] (the body contact distance less the solver's margin)."""
+    # membrane
+    faces: np.ndarray
+    """Triangles (global vertex ids), [F, 3]."""
+    dm_inv: np.ndarray
+    """Inverse rest shape matrix Dm⁻¹ of every face in its material frame [1/m], [F, 2, 2]; Dm's weft
+    row is the built one x the face's weft scale, and F = Ds Dm⁻¹ with Ds = [x1 - x0, x2 - x0]."""
+    tri_area: np.ndarray
+    """Rest area [m²], [F]: the area of the reference shape, |det Dm|/2 = built area x weft scale;
+    the membrane energy's weight (its integral over the reference shape). Mass is the built area's."""
+    tri_stiff: np.ndarray
+    """(k_u, k_v, k_uv, k_s) [N/m], [F, 4]: weft, warp, Poisson coupling, shear."""
+    tri_lock: np.ndarray
+    """(1 + lock strain [-], lock stiffness [N/m]), [F, 2]: the material's lock."""
+    # bending
+    edges: np.ndarray
+    """Hinges [E, 4]: the edge (0, 1) and the opposite corners (2, 3; -1 on a boundary)."""
+    edge_pairs: np.ndarray
+    """The edge's two vertices, [E, 2] (``edges[:, :2]``)."""
+    rest_angle: np.ndarray
+    """Rest dihedral angle [rad], [E] (0 on a boundary edge)."""
+    bend_k: np.ndarray
+    """Hinge stiffness 3 k_b |ē|²/(Ā₁+Ā₂) [N·m], [E] (0 on a boundary edge)."""
+    # topology
+    v2f_offsets: np.ndarray
+    """Start of each vertex's entries in ``v2f``, [N + 1]."""
+    v2f: np.ndarray
+    """(face, corner) of every face corner, grouped by vertex, [3F, 2]."""
+    v2e_offsets: np.ndarray
+    """Start of each vertex's entries in ``v2e``, [N + 1]."""
+    v2e: np.ndarray
+    """(edge, stencil slot 0..3) of every hinge stencil a vertex is in, grouped by vertex, [*, 2]."""
+    nbr_offsets: np.ndarray
+    """Start of each vertex's neighbours in ``nbr``, [N + 1]."""
+    nbr: np.ndarray
+    """Vertices sharing an edge with each vertex, sorted per vertex, [2E]."""
+    colours: tuple[np.ndarray, ...]
+    """Vertex ids of every colour (no two vertices of one colour share a triangle or hinge stencil;
+    each scene coloured on its own, merged by colour index)."""
+    # per-scene ranges
+    particle_range: np.ndarray
+    """[first, end) vertex of every scene, [S, 2]."""
+    face_range: np.ndarray
+    """[first, end) face of every scene, [S, 2]."""
+    edge_range: np.ndarray
+    """[first, end) edge of every scene, [S, 2]."""
+    # bodies
+    body_rest: np.ndarray
+    """Every scene's body in its start pose, concatenated in scene order [m], [B, 3]."""
+    body_faces: np.ndarray
+    """Body triangles (global body vertex ids), [Fb, 3]."""
+    body_face_part: np.ndarray
+    """Body part of every body face (0..P-1), [Fb]."""
+    body_vert_scene: np.ndarray
+    """Scene of every body vertex, [B]."""
+    body_ranges: np.ndarray
+    """[first, end) body vertex of every scene, [S, 2]."""
+    body_face_range: np.ndarray
+    """[first, end) body face of every scene, [S, 2]."""
+    part_faces: np.ndarray
+    """Body faces grouped by (scene, part), slot ``scene * P + part`` (global face ids), [Fb]."""
+    part_face_range: np.ndarray
+    """[first, end) of every slot in ``part_faces``, [S * P, 2]."""
+    part_edge_flags: np.ndarray
+    """Per entry of ``part_faces``: bit k set when the face's edge from corner k to k+1 is on the
+    part's border (a closest point there belongs to the neighbouring part), [Fb]."""
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ClothModel:
+    """Every scene's cloth and bodies as flat arrays: what does not change during a run.
+
+    The warp arrays (on ``device``; float32 and int32) are uploaded from ``host``, which holds the
+    same arrays as built (float64 and int64; see :class:`ClothHostArrays` for what each one means).
+    N = particle_count, F = face_count, E = edge_count, S = scene_count, B = body_vertex_count,
+    Fb = body faces, P = body_part_count.
     """
 
     device: str
+    """The warp device of the arrays."""
     particle_count: int
+    """N, cloth vertices of all scenes."""
     face_count: int
+    """F, cloth triangles of all scenes."""
     edge_count: int
+    """E, cloth edges (hinges) of all scenes."""
     scene_count: int
-    body_vertex_count: int = 0
-    host: dict = field(default_factory=dict)
-    colours: list = field(default_factory=list)
+    """S, scenes (each its own cloth, body, collision structures and colouring)."""
+    body_vertex_count: int
+    """B, body vertices of all scenes."""
+    body_part_count: int
+    """P, body part slots per scene."""
+    scenes_without_body: tuple[int, ...]
+    """Scenes given no body (each has a tiny far-away triangle instead, which no query finds)."""
+    host: ClothHostArrays
+    """The numpy arrays these were uploaded from (host-side readers: metrics, mesh building)."""
+    # cloth vertices
+    rest_positions: wp.array
+    """Rest positions [m], vec3 [N]."""
+    mass: wp.array
+    """Vertex mass [kg], float [N] (built area x density)."""
+    vertex_area: wp.array
+    """Vertex area [m²], float [N]."""
+    active: wp.array
+    """1 simulated, 0 pinned, int32 [N]."""
+    particle_scene: wp.array
+    """Scene of every vertex, int32 [N]."""
+    damping: wp.array
+    """Stiffness-proportional damping [s], float [N]."""
+    friction: wp.array
+    """Coulomb friction coefficient [-], float [N]."""
+    # membrane
+    faces: wp.array
+    """Triangles, int32 [F, 3]."""
+    dm_inv: wp.array
+    """Inverse rest shape matrix in the material frame [1/m], mat22 [F] (weft row scaled)."""
+    tri_area: wp.array
+    """Rest (reference) area |det Dm|/2 = built area x weft scale [m²], float [F]: the membrane's weight."""
+    tri_stiff: wp.array
+    """(k_u, k_v, k_uv, k_s) [N/m], vec4 [F]."""
+    tri_lock: wp.array
+    """(1 + lock strain [-], lock stiffness [N/m]), vec2 [F]."""
+    # bending
+    edges: wp.array
+    """Hinges (edge 0, 1; opposite corners 2, 3 or -1), int32 [E, 4]."""
+    edge_pairs: wp.array
+    """The edge's two vertices, int32 [E, 2]."""
+    rest_angle: wp.array
+    """Rest dihedral angle [rad], float [E]."""
+    bend_k: wp.array
+    """Hinge stiffness 3 k_b |ē|²/(Ā₁+Ā₂) [N·m], float [E]."""
+    # topology
+    v2f_offsets: wp.array
+    """Start of each vertex's entries in ``v2f``, int32 [N + 1]."""
+    v2f: wp.array
+    """(face, corner) grouped by vertex, int32 [3F, 2]."""
+    v2e_offsets: wp.array
+    """Start of each vertex's entries in ``v2e``, int32 [N + 1]."""
+    v2e: wp.array
+    """(edge, stencil slot) grouped by vertex, int32 [*, 2]."""
+    nbr_offsets: wp.array
+    """Start of each vertex's neighbours in ``nbr``, int32 [N + 1]."""
+    nbr: wp.array
+    """Edge neighbours, sorted per vertex, int32 [2E]."""
+    colours: list
+    """Vertex ids of each colour, one int32 array per colour (swept in order)."""
+    # bodies
+    body_rest: wp.array
+    """Bodies in their start pose [m], vec3 [B]."""
+    body_faces: wp.array
+    """Body triangles (global body vertex ids), int32 [Fb, 3]."""
+    body_face_part: wp.array
+    """Body part of every body face, int32 [Fb]."""
+    body_face_base: wp.array
+    """First body face of every scene, int32 [S]."""
+    part_faces: wp.array
+    """Body faces grouped by slot ``scene * P + part``, int32 [Fb]."""
+    part_face_base: wp.array
+    """First entry in ``part_faces`` of every slot, int32 [S * P]."""
+    part_edge_flags: wp.array
+    """Border-edge bits of every entry of ``part_faces``, int32 [Fb]."""
+
+
+@dataclass(frozen=True)
+class _Gathered:
+    """Every cloth part concatenated in scene order."""
+
+    X: np.ndarray  # rest positions [N, 3]
+    F: np.ndarray  # faces [F, 3]
+    scene: np.ndarray  # scene per vertex, int32 [N]
+    frames: np.ndarray  # weft, warp per face [F, 2, 3]
+    face_material: np.ndarray  # index into ``materials`` per face [F]
+    materials: list  # Material of every part
+    weft_scale: np.ndarray  # per face [F]
+    active: np.ndarray  # 1 simulated, 0 pinned, int32 [N]
+
+
+@dataclass(frozen=True)
+class _Membrane:
+    """See :func:`_membrane` (the fields of :class:`ClothHostArrays` of the same names)."""
+
+    dm_inv: np.ndarray
+    tri_area: np.ndarray
+    tri_stiff: np.ndarray
+    tri_lock: np.ndarray
+    mass: np.ndarray
+    vertex_area: np.ndarray
+
+
+@dataclass(frozen=True)
+class _VertexMaterial:
+    """See :func:`_vertex_materials`: the material index of every vertex and its properties."""
+
+    material: np.ndarray
+    damping: np.ndarray
+    friction: np.ndarray
+    thickness: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Bending:
+    """See :func:`_bending`."""
+
+    edge_pairs: np.ndarray
+    rest_angle: np.ndarray
+    bend_k: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Topology:
+    """See :func:`_topology`; ``conflicts`` [K, 2] are the vertex pairs the colouring separates."""
+
+    edges: np.ndarray
+    v2f_offsets: np.ndarray
+    v2f: np.ndarray
+    v2e_offsets: np.ndarray
+    v2e: np.ndarray
+    nbr_offsets: np.ndarray
+    nbr: np.ndarray
+    conflicts: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Bodies:
+    """See :meth:`ClothModelBuilder._body_arrays` (the ``body_*`` and ``part_*`` fields of
+    :class:`ClothHostArrays`), and the scenes given no body."""
+
+    rest: np.ndarray
+    faces: np.ndarray
+    face_part: np.ndarray
+    vert_scene: np.ndarray
+    ranges: np.ndarray
+    face_range: np.ndarray
+    part_faces: np.ndarray
+    part_face_range: np.ndarray
+    part_edge_flags: np.ndarray
+    missing: tuple[int, ...]
 
 
 class ClothModelBuilder:
@@ -116,100 +354,72 @@ class ClothModelBuilder:
                                       None if pinned is None else np.asarray(pinned, dtype=np.int64), weft_scale))
         return first
 
-    def add_garment(self, garment, *, scene: int = 0, material_name: Material | str | None = None) -> int:
-        """Add a :class:`~datagen.garment.mesh.GarmentMesh` (its material, material frames and
-        waistband)."""
-        return self.add_cloth(garment.vertices, garment.faces, material_name=material_name or garment.material,
-                              scene=scene, material_frames=garment.material_frames(),
-                              weft_scale=garment.weft_rest_scale())
-
     def finalize(self, device: str | None = None) -> ClothModel:
+        """Concatenate every scene into one :class:`ClothModel` on ``device`` (default: warp's)."""
         import warp as wp
 
         if not self._parts:
             raise InputError("the model has no cloth: add a garment first")
         device = str(wp.get_device(device))
-        self._parts.sort(key=lambda p: p.scene)  # stable: each scene's cloth contiguous
-        verts, faces, scene_of, frames, mats, pins, face_mat, wscale = [], [], [], [], [], [], [], []
+        g = self._gather()
+        topo = _topology(g.X, g.F)
+        membrane = _membrane(g)
+        vertex = _vertex_materials(g)
+        bending = _bending(g.X, topo.edges, g.materials, vertex.material)
+        scene_count = max(int(g.scene.max()), max(self._bodies, default=0)) + 1
+        bodies = self._body_arrays(scene_count)
+        without_cloth = sorted(set(range(scene_count)) - set(g.scene.tolist()))
+        if without_cloth:
+            raise InputError(f"scenes {without_cloth} have a body but no cloth: number scenes 0..N-1, each with cloth")
+        particle_range, face_range, edge_range = _scene_ranges(g.scene, g.F, topo.edges, scene_count)
+        host = ClothHostArrays(
+            rest_positions=g.X, mass=membrane.mass, vertex_area=membrane.vertex_area, active=g.active,
+            particle_scene=g.scene, damping=vertex.damping, friction=vertex.friction, thickness=vertex.thickness,
+            faces=g.F, dm_inv=membrane.dm_inv, tri_area=membrane.tri_area, tri_stiff=membrane.tri_stiff,
+            tri_lock=membrane.tri_lock, edges=topo.edges, edge_pairs=bending.edge_pairs,
+            rest_angle=bending.rest_angle, bend_k=bending.bend_k, v2f_offsets=topo.v2f_offsets, v2f=topo.v2f,
+            v2e_offsets=topo.v2e_offsets, v2e=topo.v2e, nbr_offsets=topo.nbr_offsets, nbr=topo.nbr,
+            colours=_scene_colours(topo.conflicts, g.scene, particle_range), particle_range=particle_range,
+            face_range=face_range, edge_range=edge_range, body_rest=bodies.rest, body_faces=bodies.faces,
+            body_face_part=bodies.face_part, body_vert_scene=bodies.vert_scene, body_ranges=bodies.ranges,
+            body_face_range=bodies.face_range, part_faces=bodies.part_faces, part_face_range=bodies.part_face_range,
+            part_edge_flags=bodies.part_edge_flags)
+        return _upload(host, device, scene_count=scene_count, scenes_without_body=bodies.missing)
+
+    def _gather(self) -> _Gathered:
+        """Concatenate the cloth parts in scene order (stable: each scene's cloth contiguous, in the
+        order it was added), their faces renumbered to global vertex ids; pinned vertices inactive."""
+        self._parts.sort(key=lambda p: p.scene)
+        verts, faces, scene_of, frames, face_mat, wscale, pins = [], [], [], [], [], [], []
         base = 0
         for k, p in enumerate(self._parts):
             verts.append(p.vertices)
             faces.append(p.faces + base)
             scene_of.append(np.full(len(p.vertices), p.scene))
             frames.append(p.frames if p.frames is not None else _edge_frames(p.vertices, p.faces))
-            mats.append(p.material)
             face_mat.append(np.full(len(p.faces), k))
             wscale.append(np.ones(len(p.faces)) if p.weft_scale is None else p.weft_scale)
             if p.pinned is not None:
                 pins.append(p.pinned + base)
             base += len(p.vertices)
-        X = np.concatenate(verts)
-        F = np.concatenate(faces)
-        scene = np.concatenate(scene_of).astype(np.int32)
-        frames = np.concatenate(frames)
-        fm = np.concatenate(face_mat)
-        host = _topology(X, F)
-        # membrane: rest shape matrix in the material frame
-        e1, e2 = X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]
-        weft = np.array(frames[:, 0], dtype=np.float64)
-        nrm = np.cross(e1, e2)
-        area = 0.5 * np.linalg.norm(nrm, axis=1)
-        if (area < 1e-12).any():
-            raise InputError(f"{int((area < 1e-12).sum())} cloth triangles have (almost) zero area: remesh the garment")
-        nrm /= 2 * area[:, None]
-        weft = weft - nrm * np.einsum("ij,ij->i", weft, nrm)[:, None]
-        weft /= np.linalg.norm(weft, axis=1, keepdims=True)
-        warp_dir = np.cross(nrm, weft)
-        Dm = np.stack([np.stack([np.einsum("ij,ij->i", e1, weft), np.einsum("ij,ij->i", e2, weft)], 1),
-                       np.stack([np.einsum("ij,ij->i", e1, warp_dir), np.einsum("ij,ij->i", e2, warp_dir)], 1)], 1)
-        weft_scale = np.concatenate(wscale)
-        Dm[:, 0, :] *= weft_scale[:, None]  # a shrunk weft: the rest shape is shorter around the body
-        dm_inv = np.linalg.inv(Dm)  # F(x) = Ds Dm⁻¹ with Ds = [x1 - x0, x2 - x0]
-        stiff = np.array([[m.stretch_weft, m.stretch_warp, m.poisson * np.sqrt(m.stretch_weft * m.stretch_warp), m.shear]
-                          for m in mats])[fm]
-        lock = np.array([[1.0 + m.lock_strain, m.lock_ratio * max(m.stretch_weft, m.stretch_warp)] for m in mats])[fm]
-        dens = np.array([m.density for m in mats])[fm]
-        mass = np.zeros(len(X))
-        varea = np.zeros(len(X))
-        for c in range(3):
-            np.add.at(mass, F[:, c], dens * area / 3)
-            np.add.at(varea, F[:, c], area / 3)
-        vmat = np.zeros(len(X), dtype=np.int64)
-        for c in range(3):
-            vmat[F[:, c]] = fm
-        damping = np.array([m.damping for m in mats])[vmat]
-        friction = np.array([m.friction for m in mats])[vmat]
-        thickness = np.array([m.thickness for m in mats])[vmat]
-        # bending
-        E = host["edges"]
-        inner = (E[:, 2] >= 0) & (E[:, 3] >= 0)
-        rest_angle = np.zeros(len(E))
-        bend_k = np.zeros(len(E))
-        if inner.any():
-            x0, x1, x2, x3 = (X[E[inner, k]] for k in range(4))
-            ed = x1 - x0
-            N1, N2 = np.cross(ed, x2 - x0), np.cross(x3 - x0, ed)
-            n1 = N1 / np.linalg.norm(N1, axis=1, keepdims=True)
-            n2 = N2 / np.linalg.norm(N2, axis=1, keepdims=True)
-            L = np.linalg.norm(ed, axis=1)
-            rest_angle[inner] = np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), ed / L[:, None]),
-                                           np.einsum("ij,ij->i", n1, n2))
-            a12 = 0.5 * (np.linalg.norm(N1, axis=1) + np.linalg.norm(N2, axis=1))
-            kb = np.array([m.bending for m in mats])[vmat[E[inner, 0]]]
-            bend_k[inner] = kb * 3.0 * L**2 / a12
-        active = np.ones(len(X), dtype=np.int32)
+        active = np.ones(base, dtype=np.int32)
         if pins:
             active[np.concatenate(pins)] = 0
-        host.update(rest_positions=X, faces=F, particle_scene=scene, mass=mass, vertex_area=varea, dm_inv=dm_inv,
-                    tri_area=area * weft_scale, tri_stiff=stiff, tri_lock=lock, rest_angle=rest_angle, bend_k=bend_k, active=active,
-                    damping=damping, friction=friction, thickness=thickness)
-        scene_count = max(int(scene.max()), max(self._bodies, default=0)) + 1
+        return _Gathered(X=np.concatenate(verts), F=np.concatenate(faces),
+                         scene=np.concatenate(scene_of).astype(np.int32), frames=np.concatenate(frames),
+                         face_material=np.concatenate(face_mat), materials=[p.material for p in self._parts],
+                         weft_scale=np.concatenate(wscale), active=active)
+
+    def _body_arrays(self, scene_count: int) -> _Bodies:
+        """Every scene's body concatenated in scene order (a scene without a body gets a tiny
+        far-away triangle, so no query ever finds it), its ranges and its faces grouped by part
+        (:func:`_body_parts`); and the scenes without a body."""
         missing = sorted(set(range(scene_count)) - set(self._bodies))
         bv, bf, bp, bs, bbase, body_ranges = [], [], [], [], 0, []
         for s in range(scene_count):
             if s in self._bodies:
                 v, f, part = self._bodies[s]
-            else:  # a scene without a body gets a tiny far-away triangle, so no query ever finds it
+            else:
                 v, f = np.array([[0.0, -1e4, 0.0], [1e-3, -1e4, 0.0], [0.0, -1e4, 1e-3]]), np.array([[0, 1, 2]])
                 part = np.zeros(1, dtype=np.int32)
             bv.append(v)
@@ -218,62 +428,142 @@ class ClothModelBuilder:
             bs.append(np.full(len(v), s))
             body_ranges.append((bbase, bbase + len(v)))
             bbase += len(v)
-        host.update(body_rest=np.concatenate(bv), body_faces=np.concatenate(bf), body_face_part=np.concatenate(bp),
-                    body_vert_scene=np.concatenate(bs), body_ranges=np.array(body_ranges), scenes_without_body=missing)
-        host.update(_body_parts(host["body_faces"], host["body_face_part"], bs, scene_count))
-        without_cloth = sorted(set(range(scene_count)) - set(scene.tolist()))
-        if without_cloth:
-            raise InputError(f"scenes {without_cloth} have a body but no cloth: number scenes 0..N-1, each with cloth")
-        bounds = lambda a: np.stack([np.searchsorted(a, np.arange(scene_count)),
-                                     np.searchsorted(a, np.arange(scene_count), side="right")], 1)
-        host["particle_range"] = bounds(scene)
-        host["face_range"] = bounds(scene[F[:, 0]])
-        host["edge_range"] = bounds(scene[E[:, 0]])
-        host["body_face_range"] = bounds(host["body_vert_scene"][host["body_faces"][:, 0]])
-        if (np.diff(scene[E[:, 0]]) < 0).any() or (np.diff(scene[F[:, 0]]) < 0).any():
-            raise AssertionError("edges and faces must be grouped by scene")
-
-        model = ClothModel(device=device, particle_count=len(X), face_count=len(F), edge_count=len(E),
-                           scene_count=scene_count, host=host, body_vertex_count=len(host["body_rest"]))
-        arr = {}
-        with wp.ScopedDevice(device):
-            f32 = lambda a, dt=float: wp.array(np.asarray(a, dtype=np.float32), dtype=dt)
-            i32 = lambda a: wp.array(np.ascontiguousarray(a, dtype=np.int32))
-            arr.update(rest_positions=f32(X, wp.vec3), mass=f32(mass), vertex_area=f32(varea), active=i32(active),
-                       particle_scene=i32(scene), faces=i32(F), dm_inv=f32(dm_inv, wp.mat22), tri_area=f32(area),
-                       tri_stiff=f32(stiff, wp.vec4), tri_lock=f32(lock, wp.vec2), edges=i32(E), rest_angle=f32(rest_angle), bend_k=f32(bend_k),
-                       v2f_offsets=i32(host["v2f_offsets"]), v2f=i32(host["v2f"]),
-                       v2e_offsets=i32(host["v2e_offsets"]), v2e=i32(host["v2e"]),
-                       nbr_offsets=i32(host["nbr_offsets"]), nbr=i32(host["nbr"]), damping=f32(damping),
-                       friction=f32(friction), thickness=f32(thickness),
-                       face_base=i32(host["face_range"][:, 0]), edge_base=i32(host["edge_range"][:, 0]),
-                       body_face_base=i32(host["body_face_range"][:, 0]),
-                       edge_pairs=i32(E[:, :2]), body_rest=f32(host["body_rest"], wp.vec3),
-                       body_faces=i32(host["body_faces"]), body_vert_scene=i32(host["body_vert_scene"]),
-                       body_face_part=i32(host["body_face_part"]), part_faces=i32(host["part_faces"]),
-                       part_edge_flags=i32(host["part_edge_flags"]),
-                       part_face_base=i32(host["part_face_range"][:, 0]))
-            colours: list[list[np.ndarray]] = []
-            conf = host["conflicts"]
-            for s_, (p0, p1) in enumerate(host["particle_range"]):
-                mine = conf[scene[conf[:, 0]] == s_] - p0
-                for k, c in enumerate(_colour(int(p1 - p0), mine)):
-                    if k == len(colours):
-                        colours.append([])
-                    colours[k].append(c + p0)
-            model.colours = [i32(np.concatenate(c)) for c in colours]
-        for k, a in arr.items():
-            object.__setattr__(model, k, a)
-        return model
+        body_faces, body_face_part, vert_scene = np.concatenate(bf), np.concatenate(bp), np.concatenate(bs)
+        part_faces, part_edge_flags, part_face_range = _body_parts(body_faces, body_face_part, vert_scene, scene_count)
+        return _Bodies(rest=np.concatenate(bv), faces=body_faces, face_part=body_face_part, vert_scene=vert_scene,
+                       ranges=np.array(body_ranges), face_range=_bounds(vert_scene[body_faces[:, 0]], scene_count),
+                       part_faces=part_faces, part_face_range=part_face_range, part_edge_flags=part_edge_flags,
+                       missing=tuple(missing))
 
 
-def _body_parts(body_faces: np.ndarray, face_part: np.ndarray, vert_scene: list, scene_count: int) -> dict:
-    """Every scene's body faces grouped by part, slot ``scene * P + part`` (P = ``body_part_count``):
-    ``part_faces`` (global face ids, slot by slot), ``part_face_range`` [S*P, 2] and
-    ``part_edge_flags`` (bit k: the face's edge from corner k to corner k+1 is on the part's
-    border, where it meets another part: a closest point there belongs to the other part)."""
+def _membrane(g: _Gathered) -> _Membrane:
+    """Per face: the inverse rest shape matrix in the material frame (weft row scaled by the face's
+    weft scale), the rest area (of that reference shape: built area x weft scale), the stiffnesses
+    and the lock; per vertex: mass and area.
+
+    The membrane energy is the integral of ψ(F) over the reference shape, so its weight is the
+    reference area |det Dm|/2. Mass and vertex area are the built area's: a waistband's weft scale
+    pre-stretches the fabric as built, it does not add or remove fabric (the garment weighs what
+    its pattern does), and drag and friction act on the surface as it is."""
+    X, F, mats, fm = g.X, g.F, g.materials, g.face_material
+    e1, e2 = X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]
+    weft = np.array(g.frames[:, 0], dtype=np.float64)
+    nrm = np.cross(e1, e2)
+    area = 0.5 * np.linalg.norm(nrm, axis=1)
+    if (area < 1e-12).any():
+        raise InputError(f"{int((area < 1e-12).sum())} cloth triangles have (almost) zero area: remesh the garment")
+    nrm /= 2 * area[:, None]
+    weft = weft - nrm * np.einsum("ij,ij->i", weft, nrm)[:, None]
+    weft /= np.linalg.norm(weft, axis=1, keepdims=True)
+    warp_dir = np.cross(nrm, weft)
+    Dm = np.stack([np.stack([np.einsum("ij,ij->i", e1, weft), np.einsum("ij,ij->i", e2, weft)], 1),
+                   np.stack([np.einsum("ij,ij->i", e1, warp_dir), np.einsum("ij,ij->i", e2, warp_dir)], 1)], 1)
+    Dm[:, 0, :] *= g.weft_scale[:, None]  # a shrunk weft: the rest shape is shorter around the body
+    dm_inv = np.linalg.inv(Dm)  # F(x) = Ds Dm⁻¹ with Ds = [x1 - x0, x2 - x0]
+    stiff = np.array([[m.stretch_weft, m.stretch_warp, m.poisson * np.sqrt(m.stretch_weft * m.stretch_warp), m.shear]
+                      for m in mats])[fm]
+    lock = np.array([[1.0 + m.lock_strain, m.lock_ratio * max(m.stretch_weft, m.stretch_warp)] for m in mats])[fm]
+    dens = np.array([m.density for m in mats])[fm]
+    mass = np.zeros(len(X))
+    varea = np.zeros(len(X))
+    for c in range(3):
+        np.add.at(mass, F[:, c], dens * area / 3)
+        np.add.at(varea, F[:, c], area / 3)
+    return _Membrane(dm_inv=dm_inv, tri_area=area * g.weft_scale, tri_stiff=stiff, tri_lock=lock, mass=mass,
+                     vertex_area=varea)
+
+
+def _vertex_materials(g: _Gathered) -> _VertexMaterial:
+    """The material of every vertex (that of the last face listing it) and its damping, friction
+    and thickness."""
+    vmat = np.zeros(len(g.X), dtype=np.int64)
+    for c in range(3):
+        vmat[g.F[:, c]] = g.face_material
+    return _VertexMaterial(material=vmat, damping=np.array([m.damping for m in g.materials])[vmat],
+                           friction=np.array([m.friction for m in g.materials])[vmat],
+                           thickness=np.array([m.thickness for m in g.materials])[vmat])
+
+
+def _bending(X: np.ndarray, E: np.ndarray, mats: list, vertex_material: np.ndarray) -> _Bending:
+    """Rest dihedral angle and stiffness 3 k_b |ē|²/(Ā₁+Ā₂) of every interior hinge (0 on the
+    boundary), from the built shape; k_b is the material of the hinge's first vertex."""
+    inner = (E[:, 2] >= 0) & (E[:, 3] >= 0)
+    rest_angle = np.zeros(len(E))
+    bend_k = np.zeros(len(E))
+    if inner.any():
+        x0, x1, x2, x3 = (X[E[inner, k]] for k in range(4))
+        ed = x1 - x0
+        N1, N2 = np.cross(ed, x2 - x0), np.cross(x3 - x0, ed)
+        n1 = N1 / np.linalg.norm(N1, axis=1, keepdims=True)
+        n2 = N2 / np.linalg.norm(N2, axis=1, keepdims=True)
+        L = np.linalg.norm(ed, axis=1)
+        rest_angle[inner] = np.arctan2(np.einsum("ij,ij->i", np.cross(n1, n2), ed / L[:, None]),
+                                       np.einsum("ij,ij->i", n1, n2))
+        a12 = 0.5 * (np.linalg.norm(N1, axis=1) + np.linalg.norm(N2, axis=1))
+        kb = np.array([m.bending for m in mats])[vertex_material[E[inner, 0]]]
+        bend_k[inner] = kb * 3.0 * L**2 / a12
+    return _Bending(edge_pairs=E[:, :2], rest_angle=rest_angle, bend_k=bend_k)
+
+
+def _bounds(scene_of: np.ndarray, scene_count: int) -> np.ndarray:
+    """[first, end) of every scene in an array of ascending scene ids, [S, 2]."""
+    return np.stack([np.searchsorted(scene_of, np.arange(scene_count)),
+                     np.searchsorted(scene_of, np.arange(scene_count), side="right")], 1)
+
+
+def _scene_ranges(scene: np.ndarray, F: np.ndarray, E: np.ndarray,
+                  scene_count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The vertex, face and edge range of every scene, [S, 2] each (each scene's faces and edges
+    contiguous)."""
+    if (np.diff(scene[E[:, 0]]) < 0).any() or (np.diff(scene[F[:, 0]]) < 0).any():
+        raise AssertionError("edges and faces must be grouped by scene")
+    return _bounds(scene, scene_count), _bounds(scene[F[:, 0]], scene_count), _bounds(scene[E[:, 0]], scene_count)
+
+
+def _scene_colours(conflicts: np.ndarray, scene: np.ndarray, particle_range: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Colour every scene on its own (:func:`_colour`) and merge the colours by index."""
+    colours: list[list[np.ndarray]] = []
+    for s, (p0, p1) in enumerate(particle_range):
+        mine = conflicts[scene[conflicts[:, 0]] == s] - p0
+        for k, c in enumerate(_colour(int(p1 - p0), mine)):
+            if k == len(colours):
+                colours.append([])
+            colours[k].append(c + p0)
+    return tuple(np.concatenate(c) for c in colours)
+
+
+def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_without_body: tuple[int, ...]) -> ClothModel:
+    """The :class:`ClothModel` on ``device``: every warp array uploaded from ``host`` (float32, int32)."""
+    import warp as wp
+
+    h = host
+    with wp.ScopedDevice(device):
+        f32 = lambda a, dt=float: wp.array(np.asarray(a, dtype=np.float32), dtype=dt)
+        i32 = lambda a: wp.array(np.ascontiguousarray(a, dtype=np.int32))
+        return ClothModel(
+            device=device, particle_count=len(h.rest_positions), face_count=len(h.faces), edge_count=len(h.edges),
+            scene_count=scene_count, body_vertex_count=len(h.body_rest),
+            body_part_count=len(h.part_face_range) // scene_count, scenes_without_body=scenes_without_body, host=h,
+            rest_positions=f32(h.rest_positions, wp.vec3), mass=f32(h.mass), vertex_area=f32(h.vertex_area),
+            active=i32(h.active), particle_scene=i32(h.particle_scene), damping=f32(h.damping),
+            friction=f32(h.friction), faces=i32(h.faces), dm_inv=f32(h.dm_inv, wp.mat22), tri_area=f32(h.tri_area),
+            tri_stiff=f32(h.tri_stiff, wp.vec4), tri_lock=f32(h.tri_lock, wp.vec2), edges=i32(h.edges),
+            edge_pairs=i32(h.edge_pairs), rest_angle=f32(h.rest_angle), bend_k=f32(h.bend_k),
+            v2f_offsets=i32(h.v2f_offsets), v2f=i32(h.v2f), v2e_offsets=i32(h.v2e_offsets), v2e=i32(h.v2e),
+            nbr_offsets=i32(h.nbr_offsets), nbr=i32(h.nbr), colours=[i32(c) for c in h.colours],
+            body_rest=f32(h.body_rest, wp.vec3), body_faces=i32(h.body_faces), body_face_part=i32(h.body_face_part),
+            body_face_base=i32(h.body_face_range[:, 0]), part_faces=i32(h.part_faces),
+            part_face_base=i32(h.part_face_range[:, 0]), part_edge_flags=i32(h.part_edge_flags))
+
+
+def _body_parts(body_faces: np.ndarray, face_part: np.ndarray, vert_scene: np.ndarray,
+                scene_count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Every scene's body faces grouped by part, slot ``scene * P + part`` (P = the largest part + 1):
+    ``part_faces`` (global face ids, slot by slot), ``part_edge_flags`` (bit k: the face's edge
+    from corner k to corner k+1 is on the part's border, where it meets another part: a closest
+    point there belongs to the other part) and ``part_face_range`` [S*P, 2], in that order."""
     P = int(face_part.max()) + 1
-    face_scene = np.concatenate(vert_scene)[body_faces[:, 0]]
+    face_scene = vert_scene[body_faces[:, 0]]
     faces, flags, ranges = [], [], []
     start = 0
     for s in range(scene_count):
@@ -287,8 +577,7 @@ def _body_parts(body_faces: np.ndarray, face_part: np.ndarray, vert_scene: list,
             flags.append((border * np.array([1, 2, 4])).sum(1))
             ranges.append((start, start + len(sel)))
             start += len(sel)
-    return {"body_part_count": P, "part_faces": np.concatenate(faces), "part_edge_flags": np.concatenate(flags),
-            "part_face_range": np.array(ranges, dtype=np.int64)}
+    return np.concatenate(faces), np.concatenate(flags), np.array(ranges, dtype=np.int64)
 
 
 def _checked_mesh(vertices, faces, what: str) -> tuple[np.ndarray, np.ndarray]:
@@ -309,8 +598,9 @@ def _edge_frames(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     return np.stack([e, np.cross(n / np.linalg.norm(n, axis=1, keepdims=True), e)], 1)
 
 
-def _topology(X: np.ndarray, F: np.ndarray) -> dict:
-    """Edges with their opposite corners, vertex-face and vertex-edge incidence, neighbours."""
+def _topology(X: np.ndarray, F: np.ndarray) -> _Topology:
+    """Edges with their opposite corners, vertex-face and vertex-edge incidence, neighbours, and the
+    colouring conflicts (vertex pairs that share a triangle or a hinge stencil)."""
     V = len(X)
     he = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     opp = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])
@@ -348,8 +638,8 @@ def _topology(X: np.ndarray, F: np.ndarray) -> dict:
     st = E[(E[:, 2] >= 0) & (E[:, 3] >= 0)]
     pairs = [E[:, :2], st[:, [0, 2]], st[:, [0, 3]], st[:, [1, 2]], st[:, [1, 3]], st[:, [2, 3]]]
     conflicts = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0)
-    return {"edges": E, "v2f_offsets": v2f_off, "v2f": vf[:, 1:], "v2e_offsets": v2e_off, "v2e": ve[:, 1:],
-            "nbr_offsets": nbr_off, "nbr": nb[:, 1], "conflicts": conflicts}
+    return _Topology(edges=E, v2f_offsets=v2f_off, v2f=vf[:, 1:], v2e_offsets=v2e_off, v2e=ve[:, 1:],
+                     nbr_offsets=nbr_off, nbr=nb[:, 1], conflicts=conflicts)
 
 
 def _colour(n: int, conflicts: np.ndarray) -> list[np.ndarray]:

@@ -347,7 +347,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     seconds = time.perf_counter() - start
     pos = np.stack(positions) if positions else np.zeros((0, model.particle_count, 3), np.float32)
     out = []
-    scene_of = model.host["particle_scene"]
+    scene_of = model.host.particle_scene
     for s in range(len(scenes)):
         sel = scene_of == s
         out.append(SceneResult(positions=pos[:, sel], faces=np.asarray(arrays[s].garment_faces),

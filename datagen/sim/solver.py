@@ -132,13 +132,13 @@ class SolverVBD:
             self.min_dist = wp.zeros(n, dtype=float)
             self.friction_used = wp.zeros(n, dtype=float)
             self.v_old = z3(n)
-            P = int(m.host["body_part_count"])
+            P = m.body_part_count
             self.body_lambda = wp.zeros((n, P), dtype=float)
             # copies of what a step carries over from the last besides the state, for a redo
             self._lagged_saved = (wp.zeros((n, P), dtype=float), z3(n))
             self.body_has = wp.zeros((n, P), dtype=wp.int32)
             self.body_point, self.body_normal, self.body_disp = (wp.zeros((n, P), dtype=wp.vec3) for _ in range(3))
-            self.body_radius = wp.array(m.host["thickness"].astype(np.float32) + self.config.body_margin, dtype=float)
+            self.body_radius = wp.array(m.host.thickness.astype(np.float32) + self.config.body_margin, dtype=float)
             self.body_start = wp.clone(m.body_rest)
             self.body_prev_sub, self.body_sub = z3(nb), wp.clone(m.body_rest)
             self.x_det = wp.clone(m.rest_positions)
@@ -153,30 +153,30 @@ class SolverVBD:
             h = m.host
             self.body_meshes = []
             for s in range(m.scene_count):
-                b0, b1 = h["body_ranges"][s]
-                bf0, bf1 = h["body_face_range"][s]
+                b0, b1 = h.body_ranges[s]
+                bf0, bf1 = h.body_face_range[s]
                 self.body_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
-                    (h["body_faces"][bf0:bf1] - b0).astype(np.int32).ravel())))
+                    (h.body_faces[bf0:bf1] - b0).astype(np.int32).ravel())))
             self.body_ids = wp.array([x.id for x in self.body_meshes], dtype=wp.uint64)
             # and one mesh per body part of each scene (slot scene * P + part; id 0 for a part
             # without faces), over the same vertex views
             self.part_meshes, part_ids = [], []
             for s in range(m.scene_count):
-                b0, b1 = h["body_ranges"][s]
+                b0, b1 = h.body_ranges[s]
                 for p in range(P):
-                    f0, f1 = h["part_face_range"][s * P + p]
+                    f0, f1 = h.part_face_range[s * P + p]
                     if f1 == f0:
                         part_ids.append(0)
                         continue
                     self.part_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
-                        (h["body_faces"][h["part_faces"][f0:f1]] - b0).astype(np.int32).ravel())))
+                        (h.body_faces[h.part_faces[f0:f1]] - b0).astype(np.int32).ravel())))
                     part_ids.append(self.part_meshes[-1].id)
             self.part_ids = wp.array(np.array(part_ids, dtype=np.uint64), dtype=wp.uint64)
-            scene_of = h["particle_scene"]
+            scene_of = h.particle_scene
             self.face_bvh = wp.Bvh(self.face_lo, self.face_hi,
-                                   groups=wp.array(scene_of[h["faces"][:, 0]].astype(np.int32), dtype=wp.int32))
+                                   groups=wp.array(scene_of[h.faces[:, 0]].astype(np.int32), dtype=wp.int32))
             self.edge_bvh = wp.Bvh(self.edge_lo, self.edge_hi,
-                                   groups=wp.array(scene_of[h["edges"][:, 0]].astype(np.int32), dtype=wp.int32))
+                                   groups=wp.array(scene_of[h.edges[:, 0]].astype(np.int32), dtype=wp.int32))
             self.vt_count = wp.zeros(n, dtype=wp.int32)
             self.tv_count = wp.zeros(nf, dtype=wp.int32)
             self.ee_count = wp.zeros(ne, dtype=wp.int32)
@@ -184,6 +184,9 @@ class SolverVBD:
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
         self._allocate_contacts(self.config.contact_capacity)
         self.contact_growths = 0
+        self._graphs: dict[tuple, tuple] = {}
+        """Captured CUDA graphs of a step, by (id(state), id(control), dt, capacity): (graph, state,
+        control), the two kept alive because the graph reads their arrays (at most 9 kept)."""
 
     def _allocate_contacts(self, cap: int) -> None:
         import warp as wp
@@ -256,7 +259,7 @@ class SolverVBD:
             return self._needed()
         # a graph bakes in its arrays and constants: one per (state, control, dt, capacity)
         key = (id(state), id(control), dt, self.capacity)
-        graphs = self.__dict__.setdefault("_graphs", {})
+        graphs = self._graphs
         if key not in graphs:
             if len(graphs) > 8:
                 graphs.clear()

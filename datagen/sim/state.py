@@ -24,7 +24,7 @@ class ClothState:
     def from_model(cls, model, positions: np.ndarray | None = None) -> ClothState:
         import warp as wp
 
-        x = model.host["rest_positions"] if positions is None else np.asarray(positions)
+        x = model.host.rest_positions if positions is None else np.asarray(positions)
         if x.shape != (model.particle_count, 3):
             raise InputError(f"positions must have shape [{model.particle_count}, 3], got {x.shape}")
         with wp.ScopedDevice(model.device):

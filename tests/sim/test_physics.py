@@ -69,7 +69,7 @@ def simulate(model, config: SolverConfig, frames: int, *, positions=None, on_fra
     Returns the final positions and velocities (numpy copies)."""
     s0 = ClothState.from_model(model, positions)
     s1 = ClothState.from_model(model, positions)
-    control = BodyControl.from_numpy(model, model.host["body_rest"])
+    control = BodyControl.from_numpy(model, model.host.body_rest)
     solver = SolverVBD(model, config)
     for k in range(frames):
         solver.step(s0, s1, control, DT)
@@ -159,9 +159,13 @@ STRIP_ITERATIONS = 50
 """Sweeps per substep for the converged strip (at the default Chebyshev ρ = 0.7)."""
 
 
-def run_strip(iterations: int):
+def run_strip(iterations: int, weft_scale: float = 1.0):
     """A 0.1 m x 1.0 m strip (2 cm grid, 6 x 51 vertices) hanging from its pinned top row, warp
-    along Y; returns the bottom row's elongation [m] at every frame."""
+    along Y; returns the bottom row's elongation [m] at every frame.
+
+    With ``weft_scale`` s != 1 the weft runs along Y instead (the material is isotropic) and every
+    face's rest length along it is s times the built one: the strip's rest (reference) length is
+    s x 1 m. It starts from that reference shape and the elongation is measured from it."""
     nx, ny, dx = 6, 51, 0.02
     X, Y = np.meshgrid(np.arange(nx) * dx, -np.arange(ny) * dx, indexing="ij")
     v = np.stack([X.ravel(), Y.ravel(), np.zeros(X.size)], 1)
@@ -173,11 +177,17 @@ def run_strip(iterations: int):
     f = np.array(faces)
     top = np.flatnonzero(np.isclose(v[:, 1], 0.0))
     bottom = np.flatnonzero(np.isclose(v[:, 1], -1.0))
-    frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), (len(f), 1, 1))  # weft X, warp Y
-    model = build((v, f), material=STRIP_MATERIAL, pinned=top, frames=frames)
+    if weft_scale == 1.0:
+        frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), (len(f), 1, 1))  # weft X, warp Y
+        model, start = build((v, f), material=STRIP_MATERIAL, pinned=top, frames=frames), None
+    else:
+        frames = np.tile(np.array([[0.0, 1.0, 0.0], [1.0, 0.0, 0.0]]), (len(f), 1, 1))  # weft Y, warp X
+        model = build((v, f), material=STRIP_MATERIAL, pinned=top, frames=frames,
+                      weft_scale=np.full(len(f), weft_scale))
+        start = v * np.array([1.0, weft_scale, 1.0])
     elong = []
     simulate(model, SolverConfig(substeps=10, iterations=iterations, self_collision=False), int(STRIP_SECONDS * FPS),
-             on_frame=lambda k, x, _v: elong.append(-x[bottom, 1].mean() - 1.0))
+             positions=start, on_frame=lambda k, x, _v: elong.append(-x[bottom, 1].mean() - weft_scale))
     return np.array(elong)
 
 
@@ -216,6 +226,46 @@ def test_hanging_strip_converges_with_iterations(strip_many, strip_exact):
     assert err_many < err5
 
 
+STRIP_WEFT_SCALE = 0.8
+
+
+def test_a_strip_with_a_shortened_weft_weighs_its_membrane_by_its_rest_area():
+    """The membrane energy is the integral of ψ(F) over the rest (reference) shape, F = Ds Dm⁻¹, so
+    a triangle's energy weight is its reference area |det Dm|/2: with a weft scale s that is s x the
+    built area (the model's ``tri_area``); its mass stays the built area x density.
+
+    A strip hung with its weft along its length, every face's weft scale s = 0.8: its reference
+    length is s L and its mass per reference area ρ/s, so the exact StVK elongation from the
+    reference length is that of a strip of length s L and density ρ/s (11.5 mm). Weighted by the
+    built area instead (1/s too much: the stiffness k/s), it would be that of density ρ (9.2 mm),
+    25 % less. The simulated strip must match the first within 5 %."""
+    s = STRIP_WEFT_SCALE
+    k, rho = STRIP_MATERIAL.stretch_warp, STRIP_MATERIAL.density
+    exact = stvk_strip_elongation(k, rho / s, s * 1.0)
+    built_area = stvk_strip_elongation(k, rho, s * 1.0)
+    elong = run_strip(STRIP_ITERATIONS, weft_scale=s)
+    mean = elong[-STRIP_WINDOW:].mean()
+    print(f"\nstrip with weft scale {s} along its length: elongation from its rest length {s:g} m, mean of the last "
+          f"0.5 s {mean * 1e3:.3f} mm (last frame {elong[-1] * 1e3:.3f} mm); exact with the reference area "
+          f"{exact * 1e3:.3f} mm (error {100 * (mean - exact) / exact:+.2f} %), with the built area "
+          f"{built_area * 1e3:.3f} mm ({100 * (mean - built_area) / built_area:+.2f} %)")
+    assert abs(mean - exact) < 0.05 * exact
+    assert abs(elong[-1] - exact) < 0.05 * exact
+
+
+def test_the_membrane_area_is_the_rest_shape_area():
+    """One source for the triangle rest area: ``tri_area`` = |det Dm|/2 of the rest shape matrix the
+    membrane uses (weft row scaled), and the vertex masses sum to the built area x density."""
+    v, f = grid(4, 3, 0.05)
+    scale = np.linspace(0.6, 1.4, len(f))
+    model = build((v, f), weft_scale=scale)
+    dm_inv = model.dm_inv.numpy().astype(np.float64)
+    built = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1)
+    np.testing.assert_allclose(model.tri_area.numpy(), 0.5 / np.abs(np.linalg.det(dm_inv)), rtol=1e-5)
+    np.testing.assert_allclose(model.tri_area.numpy(), built * scale, rtol=1e-6)
+    np.testing.assert_allclose(model.mass.numpy().sum(), COTTON.density * built.sum(), rtol=1e-6)
+
+
 # --------------------------------------------------------------------------------------------------
 # contact with planes
 
@@ -228,7 +278,7 @@ def test_cloth_at_rest_on_a_plane_stays_at_rest():
     r = COTTON.thickness + MARGIN
     cloth = grid(5, 5, 0.03, y=r)
     model = build(cloth, body=plane(3.0))
-    mass = model.host["mass"]
+    mass = model.host.mass
     ke, drift, height = [], [], []
 
     def on_frame(k, x, v):
@@ -452,7 +502,7 @@ def test_a_step_redone_after_its_contact_buffers_grew_equals_one_with_big_enough
     runs = {}
     for cap in (1, 256):
         s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
-        control = BodyControl.from_numpy(model, model.host["body_rest"])
+        control = BodyControl.from_numpy(model, model.host.body_rest)
         solver = SolverVBD(model, SolverConfig(contact_capacity=cap))
         for _ in range(FPS * 2 // 3):
             solver.step(s0, s1, control, DT)
@@ -532,7 +582,7 @@ def test_cloth_in_the_crease_of_two_body_parts_is_held_by_both(icosphere):
     model = build(cloth, body=body, body_parts=parts)
     solver = SolverVBD(model, SolverConfig())
     s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
-    control = BodyControl.from_numpy(model, model.host["body_rest"])
+    control = BodyControl.from_numpy(model, model.host.body_rest)
     both = 0
     for _ in range(FPS):
         solver.step(s0, s1, control, DT)
@@ -540,8 +590,8 @@ def test_cloth_in_the_crease_of_two_body_parts_is_held_by_both(icosphere):
         both = max(both, int((solver.body_has.numpy().sum(1) >= 2).sum()))
     x = s0.numpy()[0].astype(np.float64)
     depth = 0.2 - np.minimum(np.linalg.norm(x - [-0.15, 0, 0], axis=1), np.linalg.norm(x - [0.15, 0, 0], axis=1))
-    D = model.host["dm_inv"]
-    F = model.host["faces"]
+    D = model.host.dm_inv
+    F = model.host.faces
     e1, e2 = x[F[:, 1]] - x[F[:, 0]], x[F[:, 2]] - x[F[:, 0]]
     f0 = e1 * D[:, 0, 0, None] + e2 * D[:, 1, 0, None]
     f1 = e1 * D[:, 0, 1, None] + e2 * D[:, 1, 1, None]
@@ -596,7 +646,7 @@ def test_kinetic_energy_never_exceeds_released_potential_energy(self_collision):
     energy released, Σ m g (y₀ - y). Checked for 1 s of a cloth falling around a small sphere,
     with and without self-collision (default solver settings otherwise)."""
     model, v0, _f = small_sphere_scene()
-    mass = model.host["mass"]
+    mass = model.host.mass
     ke, released = [], []
 
     def on_frame(k, x, v):
