@@ -52,7 +52,7 @@ def _load_scene(path: str, name: str) -> dict:
     schedule, recorded_from = frame_schedule(cfg, a.lead_frames, len(a.body_frames), a.fps)
     schedule = [0.0, *schedule]  # the state before step k of the schedule is frame k here (frame 0: the drape)
     frames = a.body_frames
-    return {"garment": a.garment_vertices, "faces": a.garment_faces, "material": a.material,
+    return {"garment": a.garment_vertices, "faces": a.garment_faces, "material": a.material.name,
             "frames": a.material_frames, "body_faces": a.body_faces, "body_face_part": a.body_face_part,
             "body_vertices": frames.shape[1],
             "body": lambda f: body_at(frames, schedule[f]).astype(np.float32), "frame_count": len(schedule),

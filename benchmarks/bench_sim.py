@@ -113,7 +113,7 @@ def prepare_runs(args) -> None:
     for kind in args.garments.split(","):
         g = make_garment(kind, model, betas, seed=args.garment_seed, target_edge_length=args.edge)
         for label in args.motions.split(","):
-            motion = make_motion(label, seed=args.motion_seed, frames=args.frames + RunConfig().ramp_frames(30.0)[1])
+            motion = make_motion(label, seed=args.motion_seed, frames=RunConfig().motion_frames(args.frames, 30.0))
             scenes.append(Scene(garment=g, body=model, betas=betas, motion=motion))
             names.append(f"{kind}/{label}")
             print(f"{names[-1]}: {g.vertex_count} vertices, {args.frames} frames", flush=True)

@@ -21,7 +21,6 @@ import sys
 import time
 
 import numpy as np
-from datagen.materials import material
 from datagen.garment.types import WAISTBAND_GRIP
 from datagen.sim.scene import RunConfig, scene_arrays, simulate
 from datagen.sim.solver import SolverConfig
@@ -43,7 +42,7 @@ for gi, gkw in enumerate(spec["globals"]):
             grip = kw.pop("grip", None)
             ws = a.weft_scale if grip is None else np.where(a.weft_scale < 1, a.weft_scale * grip / WAISTBAND_GRIP,
                                                             a.weft_scale)
-            arrays.append(dataclasses.replace(a, material=dataclasses.replace(material(a.material), **kw), weft_scale=ws))
+            arrays.append(dataclasses.replace(a, material=dataclasses.replace(a.material, **kw), weft_scale=ws))
             names.append(f"g{gi}m{mi}:{name}")
     cfg = RunConfig(solver=SolverConfig(**gkw), **spec.get("run", {}))
     t0 = time.perf_counter()

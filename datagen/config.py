@@ -101,8 +101,10 @@ def _build(cls: type[T], data: Any, where: str, prefix: str) -> T:
         raise ConfigError(f"{where}: missing required key(s) {', '.join(_dotted(prefix, m) for m in missing)}")
     try:
         return cls(**kwargs)
-    except (ValueError, TypeError) as exc:
-        raise ConfigError(f"{where}: {exc}") from exc
+    except ConfigError:
+        raise
+    except (ValueError, TypeError) as exc:  # InputError is a ValueError: a component's own check
+        raise ConfigError(f"{where}: {prefix + ': ' if prefix else ''}{exc}") from exc
 
 
 def _dotted(prefix: str, name: str) -> str:

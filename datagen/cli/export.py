@@ -17,10 +17,8 @@ _SOURCE_HELP = ("a dataset store directory (with --sample), a 'drape simulate' r
 
 
 def _add_npz_options(p) -> None:
-    g = p.add_argument_group("for a 'drape simulate' result (the .npz does not record these)")
-    g.add_argument("--motion-seed", type=int, default=None, help="the --motion-seed it was run with (None: 0)")
-    g.add_argument("--garment-seed", type=int, default=None, help="the --garment-seed it was run with (None: 0)")
-    g.add_argument("--fps", type=float, default=None, help="its --fps (None: the file's, else 30)")
+    g = p.add_argument_group("for an .npz of plain arrays without an fps")
+    g.add_argument("--fps", type=float, default=None, help="its frame rate (None: the file's, else 30)")
 
 
 def register(sub, formatter) -> None:
@@ -93,7 +91,7 @@ def register(sub, formatter) -> None:
 
 
 def _npz_options(args) -> dict:
-    return {"motion_seed": args.motion_seed, "garment_seed": args.garment_seed, "fps": args.fps}
+    return {"fps": args.fps}
 
 
 def _mb(path: Path) -> str:

@@ -6,6 +6,8 @@ import json
 import time
 from pathlib import Path
 
+import numpy as np
+
 from datagen.errors import InputError
 
 
@@ -23,11 +25,13 @@ def register(sub, formatter) -> None:
     p.add_argument("--motion-seed", type=int, default=0, help="seed of the motion's style parameters")
     p.add_argument("--frames", type=int, default=120, help="recorded frames")
     p.add_argument("--fps", type=float, default=30.0, help="frame rate")
-    p.add_argument("--substeps", type=int, default=10)
-    p.add_argument("--iterations", type=int, default=20)
+    p.add_argument("--substeps", type=int, default=None, help="substeps per frame (default: the solver's, 10)")
+    p.add_argument("--iterations", type=int, default=None, help="sweeps per substep (default: the solver's, 20)")
     p.add_argument("--no-self-collision", action="store_true", help="turn cloth self-collision off")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N)")
-    p.add_argument("--out", required=True, help="output .npz (positions [T, V, 3], faces, metric_* per frame)")
+    p.add_argument("--out", required=True, help="output .npz: the garment and body of every recorded frame, the garment's rest mesh "
+                   "and panels, the body's rig, metric_* per simulated frame (`drape export usd` and `drape preview` "
+                   "read it as it is)")
     p.set_defaults(func=_cmd_simulate)
 
 
@@ -55,12 +59,13 @@ def _cmd_simulate(args) -> int:
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
     garment = make_garment(args.garment, model, betas, seed=args.garment_seed)
-    config = RunConfig(solver=SolverConfig(substeps=args.substeps, iterations=args.iterations,
-                                           self_collision=not args.no_self_collision))
-    _, ramp_motion = config.ramp_frames(args.fps)  # the ramp plays these motion frames unrecorded
-    motion = make_motion(args.motion, seed=args.motion_seed, frames=args.frames + ramp_motion, fps=args.fps)
+    given = {k: v for k, v in (("substeps", args.substeps), ("iterations", args.iterations)) if v is not None}
+    config = RunConfig(solver=SolverConfig(**given, self_collision=not args.no_self_collision))
+    motion = make_motion(args.motion, seed=args.motion_seed, frames=config.motion_frames(args.frames, args.fps),
+                         fps=args.fps)
     print(f"{args.garment} ({garment.vertex_count} vertices, {garment.material.name}) on {args.body}, "
-          f"{args.motion} {args.frames} frames at {args.fps:g} fps, {args.substeps} substeps x {args.iterations} "
+          f"{args.motion} {args.frames} frames at {args.fps:g} fps, {config.solver.substeps} substeps x "
+          f"{config.solver.iterations} "
           f"iterations, self-collision {'off' if args.no_self_collision else 'on'}, device {device}", flush=True)
     t0 = time.perf_counter()
 
@@ -72,7 +77,15 @@ def _cmd_simulate(args) -> int:
     result = simulate([Scene(garment=garment, body=model, betas=betas, motion=motion)], config, device=device,
                       progress=progress)[0]
     summary = result.summary()
-    result.save(out, config=json.dumps(config.as_dict()), garment=args.garment, motion=args.motion, body=args.body)
+    # the file is a whole animation (what `drape export` and `drape preview` read, nothing made again):
+    # the run's arrays, the garment's rest mesh and panels, the body's rig and what the run was made of
+    result.save(out, garment_rest=garment.vertices.astype(np.float32), region=garment.vertex_region,
+                region_names=np.array(garment.region_names), body_faces=np.asarray(model.faces),
+                rest_joints=np.asarray(model.rest_joints(betas))[0], parents=np.asarray(model.parents),
+                rest_body_vertices=np.asarray(model.shaped(betas))[0].astype(np.float32),
+                skin_weights=np.asarray(model.weights, np.float32), config=json.dumps(config.as_dict()),
+                garment=args.garment, garment_seed=args.garment_seed, motion=args.motion,
+                motion_seed=args.motion_seed, body=args.body, material=json.dumps(garment.material.as_dict()))
     frames = len(result.metrics["nan"])
     print(f"wrote {out}: {result.positions.shape[0]} recorded frames of {frames} simulated, "
           f"{1000 * result.seconds / frames:.0f} ms/frame")

@@ -5,10 +5,9 @@
 - a dataset store sample (:func:`from_store`): the simulated garment (``detail``), the posed
   body, the garment instance's rest mesh and region labels, the pose and translation, and, for a
   UsdSkel rig, the store's body model (rest shape from the sample's betas, skinning weights);
-- a ``drape simulate`` result (:func:`from_npz`, an ``.npz`` with ``positions``, ``faces``,
-  ``motion_from`` and the ``garment``, ``motion`` and ``body`` names): the body is posed again from
-  the named preset and motion on the default body (the file does not hold it), and the garment is
-  made again to get its regions and rest shape (used only if its faces equal the file's);
+- a ``drape simulate`` result (:func:`from_npz`): the plain arrays below as the simulator recorded
+  them (the body it collided with, the poses, the garment's rest mesh and panels, the body's rig),
+  with the run's metrics, failure and the names and seeds it was made from; nothing is made again;
 - plain arrays (:func:`from_npz`, an ``.npz`` with ``garment_vertices``), e.g. a model's
   prediction: ``garment_vertices`` [T, V, 3], ``garment_faces`` [F, 3], ``body_vertices``
   [T, B, 3], ``body_faces`` [Fb, 3], ``fps``; optional ``region`` [V], ``region_names`` [R]
@@ -20,7 +19,6 @@
 
 from __future__ import annotations
 
-import json
 import logging
 import os
 from dataclasses import dataclass, field, replace
@@ -246,16 +244,9 @@ def _scalar(d, key: str, default=None):
     return v.item() if v.ndim == 0 else v
 
 
-def from_npz(path: str | os.PathLike, *, motion_seed: int | None = None, garment_seed: int | None = None,
-             fps: float | None = None) -> Animation:
-    """An ``.npz`` of plain arrays or a ``drape simulate`` result (see the module docstring).
-
-    Args:
-        path: the file.
-        motion_seed, garment_seed, fps: for a ``drape simulate`` result, the ``--motion-seed``,
-            ``--garment-seed`` and ``--fps`` it was run with (the file does not record them;
-            defaults: 0, 0, 30, as ``drape simulate``'s). Values in the file win.
-    """
+def from_npz(path: str | os.PathLike, *, fps: float | None = None) -> Animation:
+    """An ``.npz`` of plain arrays or a ``drape simulate`` result (see the module docstring);
+    ``fps`` is for files without one (default 30)."""
     path = Path(path)
     if not path.is_file():
         raise InputError(f"{path} does not exist")
@@ -266,10 +257,14 @@ def from_npz(path: str | os.PathLike, *, motion_seed: int | None = None, garment
     if "garment_vertices" in d:
         return _from_arrays(path, d, fps)
     if {"positions", "faces", "motion", "body", "garment"} <= set(d):
-        return _from_simulation(path, d, motion_seed, garment_seed, fps)
+        raise InputError(f"{path} is a 'drape simulate' result from an older drape, which did not record the body "
+                         "and the garment's panels: run drape simulate again to export it")
     raise InputError(f"{path} holds neither plain arrays ('garment_vertices', 'body_vertices', ...) nor a "
-                     f"'drape simulate' result ('positions', 'faces', 'motion', 'body', 'garment'); it has "
-                     f"{sorted(d)}")
+                     f"'drape simulate' result; it has {sorted(d)}")
+
+
+_RUN_KEYS = ("garment", "garment_seed", "body", "motion", "motion_seed", "recorded_from", "motion_from")
+"""What a ``drape simulate`` result records of its run, carried into the animation's metadata."""
 
 
 def _from_arrays(path: Path, d: dict, fps: float | None) -> Animation:
@@ -286,63 +281,24 @@ def _from_arrays(path: Path, d: dict, fps: float | None) -> Animation:
                                parents=d.get("parents", np.array(SMPL_PARENTS)),
                                rest_vertices=d.get("rest_body_vertices"), weights=d.get("skin_weights"))
     names = tuple(str(n) for n in d["region_names"]) if "region_names" in d else None
+    meta = {"source": str(path), "fps": fps, "frames": int(len(d["garment_vertices"]))}
+    title = path.name
+    if "garment" in d:  # a drape simulate result: what it was made of and how it went
+        run = {k: _scalar(d, k) for k in _RUN_KEYS if k in d}
+        meta.update({("garment_type" if k == "garment" else k): v for k, v in run.items()})
+        failure = str(_scalar(d, "failure", ""))
+        meta["failure"] = failure or "ok"
+        if failure:
+            logger.warning("%s: the simulation failed (%s: %s); exporting its recorded frames anyway", path, failure,
+                           _scalar(d, "failure_message", ""))
+        if "config" in d:
+            meta["run_config"] = str(_scalar(d, "config"))
+        title = (f"{path.name}: {run.get('garment')} on {run.get('body')}, {run.get('motion')}"
+                 + (f" [failed: {failure}]" if failure else ""))
     return Animation(body_vertices=np.asarray(d["body_vertices"], np.float32), body_faces=d["body_faces"],
                      garment_vertices=np.asarray(d["garment_vertices"], np.float32), garment_faces=d["garment_faces"],
                      fps=fps, region=d.get("region"), region_names=names, garment_rest=d.get("garment_rest"),
-                     skeleton=sk, metadata={"source": str(path), "fps": fps}, title=path.name)
-
-
-def _from_simulation(path: Path, d: dict, motion_seed, garment_seed, fps) -> Animation:
-    from datagen.body.cache import default_body
-    from datagen.body.shapes import resolve_betas
-    from datagen.garment.types import make_garment
-    from datagen.motion.library import make_motion
-
-    positions = np.asarray(d["positions"], np.float32)
-    if positions.ndim != 3 or positions.shape[0] == 0:
-        raise InputError(f"{path}: positions must be [T, V, 3] with T >= 1, got {positions.shape}")
-    T = positions.shape[0]
-    garment_name, motion_name, body_name = (str(_scalar(d, k)) for k in ("garment", "motion", "body"))
-    motion_seed = int(_scalar(d, "motion_seed", motion_seed if motion_seed is not None else 0))
-    garment_seed = int(_scalar(d, "garment_seed", garment_seed if garment_seed is not None else 0))
-    fps = float(_scalar(d, "fps", fps if fps is not None else DEFAULT_FPS))
-    motion_from = int(_scalar(d, "motion_from", 0))
-    failure = str(_scalar(d, "failure", ""))
-    if failure:
-        logger.warning("%s: the simulation failed (%s); exporting its recorded frames anyway", path, failure)
-    model = default_body()
-    betas = resolve_betas(model, body=body_name)[0]
-    # drape simulate made the motion with motion_from extra frames (its ramp) and recorded the rest
-    motion = make_motion(motion_name, seed=motion_seed, frames=T + motion_from, fps=fps)
-    poses, trans = motion.poses[motion_from:], motion.trans[motion_from:]
-    verts, _ = model.pose(np.repeat(betas[None], T, 0), poses.reshape(T, -1), trans)
-    rest_v = np.asarray(model.shaped(betas))[0]
-    sk = SkeletonAnimation(poses=poses, trans=trans, rest_joints=np.asarray(model.rest_joints(betas))[0],
-                           parents=model.parents, rest_vertices=rest_v, weights=model.weights)
-    region = names = rest = None
-    quiet_warp()  # the garment builder uses warp
-    garment = make_garment(garment_name, model, betas, seed=garment_seed)
-    if np.array_equal(np.asarray(garment.faces), np.asarray(d["faces"])):
-        region, names, rest = garment.vertex_region, tuple(garment.region_names), garment.vertices
-    else:
-        logger.warning("%s: %s seed %d made again does not have the file's faces (another --garment-seed?); "
-                       "writing no regions", path, garment_name, garment_seed)
-    config = {}
-    if "config" in d:
-        try:
-            config = json.loads(str(_scalar(d, "config")))
-        except ValueError:
-            config = {}
-    meta = {"source": str(path), "garment_type": garment_name, "garment_seed": garment_seed, "body": body_name,
-            "motion": motion_name, "motion_seed": motion_seed, "fps": fps, "frames": T,
-            "failure": failure or "ok", "recorded_from": int(_scalar(d, "recorded_from", 0)),
-            "motion_from": motion_from}
-    if config:
-        meta["run_config"] = json.dumps(config)
-    title = f"{path.name}: {garment_name} on {body_name}, {motion_name}" + (f" [failed: {failure}]" if failure else "")
-    return Animation(body_vertices=verts.astype(np.float32), body_faces=np.asarray(model.faces),
-                     garment_vertices=positions, garment_faces=np.asarray(d["faces"]), fps=fps, region=region,
-                     region_names=names, garment_rest=rest, skeleton=sk, metadata=meta, title=title)
+                     skeleton=sk, metadata=meta, title=title)
 
 
 def load_animation(source: str | os.PathLike, sample: int | None = None, *, frames: np.ndarray | None = None,

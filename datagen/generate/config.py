@@ -6,7 +6,9 @@ table per split::
 
     seed = 0
     frames = 60                     # recorded frames per sample (motion frames)
-    [simulation]
+    [simulation]                    # datagen.sim.scene.RunConfig, and batch_size
+    ramp = 1.0
+    [simulation.solver]             # datagen.sim.solver.SolverConfig
     substeps = 10
     [train]
     garments = ["tshirt:0", "pants:0"]      # type:seed
@@ -28,6 +30,7 @@ from pathlib import Path
 
 from datagen.config import load_config
 from datagen.errors import ConfigError
+from datagen.sim.scene import RunConfig
 
 BODY_PRESETS = ("thin", "regular", "fat")
 DISJOINT_KINDS = ("garments", "bodies", "motions")
@@ -53,25 +56,17 @@ class SplitConfig:
 
 
 @dataclass(frozen=True, kw_only=True)
-class SimulationConfig:
-    """Simulator settings of every scene (see :class:`datagen.sim.scene.RunConfig`).
+class SimulationConfig(RunConfig):
+    """How every scene is simulated: the simulator's own :class:`~datagen.sim.scene.RunConfig`
+    (its phases, ``solver`` settings and failure ``thresholds``, with the simulator's defaults and
+    limits), and how many scenes share a model.
 
     Attributes:
-        substeps, iterations: per frame and per substep.
-        self_collision: cloth-cloth contact.
-        settle_rest, settle_pose: frames of rest before the lead-in and after it.
-        lead_in: seconds from the rest pose into the motion's first pose.
-        ramp: seconds over which the motion starts from standstill (not recorded).
-        batch_size: scenes simulated together in one model (same frame count).
+        batch_size: scenes simulated together in one model (same frame count); it only spreads the
+            work (a scene's result does not depend on its batch), so it is not part of a store's
+            identity.
     """
 
-    substeps: int = field(default=10, metadata={"min": 1, "max": 200})
-    iterations: int = field(default=20, metadata={"min": 1, "max": 200})
-    self_collision: bool = True
-    settle_rest: int = field(default=15, metadata={"min": 1, "max": 1000})
-    lead_in: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0})
-    settle_pose: int = field(default=10, metadata={"min": 0, "max": 1000})
-    ramp: float = field(default=1.0, metadata={"min": 0.0, "max": 10.0})
     batch_size: int = field(default=8, metadata={"min": 1, "max": 4096})
 
 

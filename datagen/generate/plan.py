@@ -30,6 +30,8 @@ class Plan:
 
     def __init__(self, config: DatasetConfig):
         self.config = config
+        self._garments: dict[int, object] = {}  # instance -> GarmentMesh, built on first use
+        self._correspondences: dict[int, dict] = {}  # instance -> garment_correspondence(...)
         self.bodies: list[str] = []
         self.motions: list[str] = []
         self.instances: list[tuple[str, str]] = []  # (garment "type:seed", body name)
@@ -75,24 +77,17 @@ class Plan:
         from datagen.motion.library import make_motion
 
         label, seed = parse_motion(self.motions[m])
-        _, extra = self.run_config.ramp_frames(self.config.fps)
-        return make_motion(label, seed=seed, frames=self.config.frames + extra, fps=self.config.fps)
+        frames = self.run_config.motion_frames(self.config.frames, self.config.fps)
+        return make_motion(label, seed=seed, frames=frames, fps=self.config.fps)
 
-    @cached_property
+    @property
     def run_config(self):
-        from datagen.sim.scene import RunConfig
-        from datagen.sim.solver import SolverConfig
-
-        s = self.config.simulation
-        return RunConfig(settle_rest=s.settle_rest, lead_in=s.lead_in, settle_pose=s.settle_pose, ramp=s.ramp,
-                         solver=SolverConfig(substeps=s.substeps, iterations=s.iterations,
-                                             self_collision=s.self_collision))
-
-    _garments: dict
+        """How every scene is run: the config's simulation settings (a :class:`RunConfig`)."""
+        return self.config.simulation
 
     def garment(self, g: int):
         """Garment instance g (built once per process)."""
-        cache = self.__dict__.setdefault("_garments", {})
+        cache = self._garments
         if g not in cache:
             from datagen.garment.cache import cached_garment
 
@@ -103,7 +98,7 @@ class Plan:
         return cache[g]
 
     def correspondence(self, g: int) -> dict:
-        cache = self.__dict__.setdefault("_corr", {})
+        cache = self._correspondences
         if g not in cache:
             from datagen.targets import garment_correspondence
 

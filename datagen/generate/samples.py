@@ -15,15 +15,15 @@ from datagen.generate.plan import SPLIT_CODES, Plan
 # --------------------------------------------------------------------------------------- samples
 
 
-def failure_code(reason: str | None) -> int:
+def failure_code(failure) -> int:
+    """The store's code of a :class:`~datagen.sim.metrics.Failure` (0 for None)."""
     from schemas.dataset import FAILURE_NAMES
 
-    if reason is None:
+    if failure is None:
         return 0
-    head = reason.split(":")[0].strip()
-    if head not in FAILURE_NAMES:
-        raise InputError(f"simulator failure {reason!r} has no code in schemas.dataset.FAILURE_NAMES")
-    return FAILURE_NAMES.index(head)
+    if failure.code not in FAILURE_NAMES:
+        raise InputError(f"simulator failure code {failure.code!r} has no entry in schemas.dataset.FAILURE_NAMES")
+    return FAILURE_NAMES.index(failure.code)
 
 
 def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
@@ -43,23 +43,18 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
         for s, scene, r in zip(batch, scenes, results):
             arrays = {f"metric_{k}": np.asarray(v) for k, v in r.metrics.items()}
             arrays["metric_nan"] = arrays["metric_nan"].astype(np.uint8)
-            motion = scene.motion
-            k0 = r.motion_from
-            frames = np.arange(k0, k0 + len(r.positions))
+            garment = plan.garment(s.garment)
             if r.failure is None:
-                corr = plan.correspondence(s.garment)
-                poses, trans = motion.poses[frames], motion.trans[frames]
-                t = sample_targets(plan.garment(s.garment).vertices, plan.garment(s.garment).faces, plan.subdivided,
-                                   plan.betas[s.body], poses, trans, r.positions, indicator=corr["indicator"])
-                body_v, _ = plan.body_model.pose(np.repeat(plan.betas[s.body][None], len(frames), 0),
-                                                 poses.reshape(len(frames), -1), trans)
+                # the simulator returns the recorded frames' poses and posed body (no posing again)
+                t = sample_targets(garment.vertices, garment.faces, plan.subdivided, plan.betas[s.body], r.poses,
+                                   r.trans, r.positions, indicator=plan.correspondence(s.garment)["indicator"])
                 arrays.update({k: np.asarray(v, np.float32) for k, v in t.items()})
                 arrays["detail"] = r.positions.astype(np.float32)
-                arrays.update(pose=poses.astype(np.float32), trans=trans.astype(np.float32),
-                              label=np.full(len(frames), motion.label, np.int32),
-                              body_vertices=body_v.astype(np.float32))
+                arrays.update(pose=r.poses.astype(np.float32), trans=r.trans.astype(np.float32),
+                              label=np.full(len(r.positions), scene.motion.label, np.int32),
+                              body_vertices=r.body_vertices.astype(np.float32))
             else:  # a failed scene keeps its metrics and reason, no frames
-                V, B = len(plan.garment(s.garment).vertices), plan.body_model.vertex_count
+                V, B = len(garment.vertices), plan.body_model.vertex_count
                 z = lambda *shape: np.zeros(shape, np.float32)  # noqa: E731
                 arrays.update({k: z(0, V, 3) for k in ("detail", "coarse", "anchor", "anchor_normal", "anchor_skin",
                                                        "coarse_normal", "skin")})
@@ -70,5 +65,3 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
                        "recorded_from": r.recorded_from,
                        "seconds": (time.perf_counter() - t0) / len(batch)}
             on_sample(s.index, arrays, scalars)
-
-

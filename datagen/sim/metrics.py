@@ -48,6 +48,26 @@ class FailureThresholds:
     slip: float = 0.06
 
 
+FAILURE_CODES = ("nan", "penetration", "self-intersection", "slip", "stretch")
+"""What a scene can fail on (:attr:`Failure.code`); a store's ``samples/failure`` numbers them by
+``schemas.dataset.FAILURE_NAMES``, which holds every one of them."""
+
+
+@dataclass(frozen=True)
+class Failure:
+    """Why a scene failed: ``code`` (one of :data:`FAILURE_CODES`) and a sentence with the figures."""
+
+    code: str
+    message: str
+
+    def __post_init__(self):
+        if self.code not in FAILURE_CODES:
+            raise ValueError(f"failure code {self.code!r} is not one of {FAILURE_CODES}")
+
+    def __str__(self) -> str:
+        return f"{self.code}: {self.message}"
+
+
 @wp.kernel
 def _inside(body_meshes: wp.array(dtype=wp.uint64), x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
             depth: wp.array(dtype=float)):
@@ -181,22 +201,24 @@ class Metrics:
         np.maximum.at(out["penetration_depth"], self._scene, depth)
         return out
 
-    def failure(self, frame: dict[str, np.ndarray], scene: int, thresholds: FailureThresholds) -> str | None:
-        """The reason scene ``scene`` fails on this frame's metrics, or None."""
+    def failure(self, frame: dict[str, np.ndarray], scene: int, thresholds: FailureThresholds) -> Failure | None:
+        """Why scene ``scene`` fails on this frame's metrics, or None."""
         if frame["nan"][scene] or not np.isfinite(frame["kinetic_energy"][scene]):
-            return "nan: positions or velocities are not finite"
+            return Failure("nan", "positions or velocities are not finite")
         share = frame["penetration_count"][scene] / self._counts[scene]
         if share > thresholds.penetration_share:
-            return f"penetration: {share:.1%} of vertices inside the body (limit {thresholds.penetration_share:.1%})"
+            return Failure("penetration", f"{share:.1%} of vertices inside the body "
+                           f"(limit {thresholds.penetration_share:.1%})")
         if frame["penetration_depth"][scene] > thresholds.penetration_depth:
-            return (f"penetration: a vertex {frame['penetration_depth'][scene] * 1000:.1f} mm inside the body "
-                    f"(limit {thresholds.penetration_depth * 1000:.0f} mm)")
+            return Failure("penetration", f"a vertex {frame['penetration_depth'][scene] * 1000:.1f} mm inside the "
+                           f"body (limit {thresholds.penetration_depth * 1000:.0f} mm)")
         if frame["self_intersections"][scene] > thresholds.self_intersections:
-            return (f"self-intersection: {frame['self_intersections'][scene]} edge-triangle crossings "
-                    f"(limit {thresholds.self_intersections})")
+            return Failure("self-intersection", f"{frame['self_intersections'][scene]} edge-triangle "
+                           f"crossings (limit {thresholds.self_intersections})")
         if frame["slip"][scene] > thresholds.slip:
-            return (f"slip: the garment's top moved {frame['slip'][scene] * 100:.1f} cm off the body points that "
-                    f"carry it (limit {thresholds.slip * 100:.0f} cm): it is sliding off the body")
+            return Failure("slip", f"the garment's top moved {frame['slip'][scene] * 100:.1f} cm off the body "
+                           f"points that carry it (limit {thresholds.slip * 100:.0f} cm): it is sliding off the body")
         if frame["stretch_max"][scene] > thresholds.stretch:
-            return f"stretch: a triangle stretched by {frame['stretch_max'][scene]:.0%} (limit {thresholds.stretch:.0%})"
+            return Failure("stretch", f"a triangle stretched by {frame['stretch_max'][scene]:.0%} "
+                           f"(limit {thresholds.stretch:.0%})")
         return None

@@ -12,7 +12,7 @@ Every scene starts with its garment at rest on its body in the rest pose. Then:
    3.7 g: the cloth tears off the body). The ramp plays motion frames 0 to R/2 (the body between
    frames is interpolated linearly) and these are not recorded;
 5. the motion's frames from R/2 on, which are recorded. Ask for R/2 frames more than you want
-   recorded (:meth:`RunConfig.ramp_frames`).
+   recorded: :meth:`RunConfig.motion_frames` says how many a motion needs.
 
 Metrics are measured every frame of every phase; a scene that passes a failure threshold in any
 frame is flagged with the reason (and kept running, so the batch goes on).
@@ -29,7 +29,8 @@ import numpy as np
 
 from datagen.body.skeleton import face_parts
 from datagen.errors import InputError, SimulationError
-from datagen.sim.metrics import METRIC_NAMES, FailureThresholds, Metrics
+from datagen.materials import Material
+from datagen.sim.metrics import METRIC_NAMES, Failure, FailureThresholds, Metrics
 from datagen.sim.model import ClothModelBuilder
 from datagen.sim.solver import SolverConfig, SolverVBD
 from datagen.sim.state import BodyControl, ClothState
@@ -39,12 +40,21 @@ log = logging.getLogger(__name__)
 
 @dataclass(frozen=True, kw_only=True)
 class RunConfig:
-    """How a scene is run (frames at the motion's frame rate)."""
+    """How a scene is run (frames at the motion's frame rate); see the module doc for the phases.
 
-    settle_rest: int = 15
-    lead_in: float = 0.5
-    settle_pose: int = 10
-    ramp: float = 1.0
+    Attributes:
+        settle_rest: frames of rest in the rest pose before the lead-in.
+        lead_in: seconds from the rest pose into the motion's first pose.
+        settle_pose: frames holding the first pose after the lead-in.
+        ramp: seconds over which the motion starts from standstill (not recorded).
+        solver: the solver's settings.
+        thresholds: what makes a scene fail.
+    """
+
+    settle_rest: int = field(default=15, metadata={"min": 1, "max": 1000})
+    lead_in: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0})
+    settle_pose: int = field(default=10, metadata={"min": 0, "max": 1000})
+    ramp: float = field(default=1.0, metadata={"min": 0.0, "max": 10.0})
     solver: SolverConfig = field(default_factory=SolverConfig)
     thresholds: FailureThresholds = field(default_factory=FailureThresholds)
 
@@ -58,6 +68,11 @@ class RunConfig:
         are not recorded."""
         r = 2 * int(round(self.ramp * fps / 2))
         return r, r // 2
+
+    def motion_frames(self, recorded: int, fps: float) -> int:
+        """Motion frames a scene needs to record ``recorded`` frames: those and the ramp's
+        (the one place this is worked out: generate, ``drape simulate`` and the benchmarks ask)."""
+        return int(recorded) + self.ramp_frames(fps)[1]
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -82,33 +97,55 @@ class Scene:
 
 @dataclass
 class SceneResult:
-    """What one scene produced.
+    """What one scene produced: the recorded frames of the garment and of what moved it.
 
     Attributes:
         positions: garment vertices of the recorded frames [m], [T, V, 3] float32.
         faces: garment triangles [F, 3].
+        body_vertices: the body of the recorded frames [m], [T, B, 3] float32 (the collider the
+            cloth saw: the scene's own body frames, not posed again).
+        poses: SMPL axis-angle poses of the recorded frames [T, 24, 3] (rad), or None when the
+            scene came as arrays without them.
+        trans: root translations of the recorded frames [T, 3] (m), or None likewise.
+        fps: frame rate [1/s].
         metrics: name -> per-frame values over every simulated frame [settle + lead-in + T].
         recorded_from: index of the first recorded frame in ``metrics``.
         motion_from: the motion frame of the first recorded frame (the ramp's frames before it).
-        failure: the reason the scene failed, or None.
+        failure: why the scene failed, or None.
         failure_frame: the frame (index into ``metrics``) where it first failed, or -1.
         seconds: wall time of the batch this scene was in.
     """
 
     positions: np.ndarray
     faces: np.ndarray
+    body_vertices: np.ndarray
+    poses: np.ndarray | None
+    trans: np.ndarray | None
+    fps: float
     metrics: dict
     recorded_from: int
     motion_from: int
-    failure: str | None
+    failure: Failure | None
     failure_frame: int
     seconds: float
 
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The result as named arrays (what :meth:`save` writes): ``garment_vertices``,
+        ``garment_faces``, ``body_vertices``, ``fps``, ``pose``/``trans`` when known, the run's
+        ``recorded_from``, ``motion_from``, ``failure`` (code, empty when none), ``failure_message``,
+        ``failure_frame`` and ``metric_<name>`` per simulated frame."""
+        out = {"garment_vertices": self.positions, "garment_faces": self.faces, "body_vertices": self.body_vertices,
+               "fps": np.float64(self.fps), "recorded_from": self.recorded_from, "motion_from": self.motion_from,
+               "failure": "" if self.failure is None else self.failure.code,
+               "failure_message": "" if self.failure is None else self.failure.message,
+               "failure_frame": self.failure_frame, **{f"metric_{k}": v for k, v in self.metrics.items()}}
+        if self.poses is not None:
+            out.update(pose=self.poses.astype(np.float32), trans=self.trans.astype(np.float32))
+        return out
+
     def save(self, path, **extra) -> None:
-        np.savez_compressed(path, positions=self.positions, faces=self.faces, recorded_from=self.recorded_from,
-                            motion_from=self.motion_from,
-                            failure="" if self.failure is None else self.failure, failure_frame=self.failure_frame,
-                            **{f"metric_{k}": v for k, v in self.metrics.items()}, **extra)
+        """Write :meth:`arrays` and ``extra`` to a compressed ``.npz``."""
+        np.savez_compressed(path, **self.arrays(), **extra)
 
     def summary(self) -> dict:
         rec = {k: np.asarray(v)[self.recorded_from:] for k, v in self.metrics.items()}
@@ -124,19 +161,20 @@ class SceneResult:
             "self_intersections_max": int(np.max(rec["self_intersections"])),
             "kinetic_energy_max": float(np.max(rec["kinetic_energy"])),
             "nan": bool(np.any(rec["nan"])),
-            "failure": self.failure,
+            "failure": None if self.failure is None else str(self.failure),
         }
 
 
-@dataclass
+@dataclass(frozen=True, kw_only=True)
 class SceneArrays:
-    """A scene reduced to arrays: what the simulator needs, without the body model or motion code
-    (so a scene can be prepared on one machine and simulated on another).
+    """A scene reduced to arrays and values: what the simulator needs, without the body model or
+    motion code (so a scene can be prepared on one machine and simulated on another).
 
     Attributes:
         garment_vertices: the garment's rest drape [V, 3] (m), at the motion's first translation.
         garment_faces: triangles [F, 3].
-        material: material preset name.
+        material: the cloth's :class:`~datagen.materials.Material` (a value: a custom material
+            reaches the solver as given).
         material_frames: weft and warp directions per face [F, 2, 3].
         weft_scale: rest length along the weft relative to the built mesh, per face [F] (below 1
             on an elastic waistband).
@@ -146,11 +184,13 @@ class SceneArrays:
         lead_frames: lead-in frames at the start of ``body_frames`` (frame 0 is the rest pose).
         body_face_part: body part of every body face [Fb] (:func:`datagen.body.skeleton.face_parts`;
             None: the body is one part).
+        poses: the pose of every body frame [N, 24, 3] (rad, axis-angle), or None.
+        trans: the root translation of every body frame [N, 3] (m), or None.
     """
 
     garment_vertices: np.ndarray
     garment_faces: np.ndarray
-    material: str
+    material: Material
     material_frames: np.ndarray
     weft_scale: np.ndarray
     body_frames: np.ndarray
@@ -158,6 +198,17 @@ class SceneArrays:
     fps: float
     lead_frames: int
     body_face_part: np.ndarray | None = None
+    poses: np.ndarray | None = None
+    trans: np.ndarray | None = None
+
+    def __post_init__(self):
+        if not isinstance(self.material, Material):
+            raise InputError(f"SceneArrays.material must be a Material (datagen.materials.material(name) gives a "
+                             f"preset), got {self.material!r}")
+        n = len(self.body_frames)
+        if (self.poses is None) != (self.trans is None) or (
+                self.poses is not None and (len(self.poses) != n or len(self.trans) != n)):
+            raise InputError(f"poses and trans must both be given with one row per body frame ({n}), or neither")
 
     @property
     def frame_count(self) -> int:
@@ -178,31 +229,12 @@ def scene_arrays(scene: Scene, lead_in: float) -> SceneArrays:
         raise InputError("the motion's lead-in does not start in the body's rest pose")
     g = s.garment
     return SceneArrays(garment_vertices=g.vertices + shift.mean(0), garment_faces=np.asarray(g.faces),
-                       material=g.material.name, material_frames=g.material_frames(), weft_scale=g.weft_rest_scale(),
+                       material=g.material, material_frames=g.material_frames(), weft_scale=g.weft_rest_scale(),
                        body_frames=verts.astype(np.float32), body_faces=np.asarray(s.body.faces),
                        fps=float(s.motion.fps), lead_frames=int(lead),
-                       body_face_part=face_parts(s.body.weights, s.body.faces))
-
-
-def save_scene_arrays(path, scenes: list[SceneArrays], **extra) -> None:
-    """Write scenes to one .npz (``s{k}_{field}`` keys), readable with numpy and warp alone."""
-    data = {"scene_count": len(scenes)}
-    for k, a in enumerate(scenes):
-        data.update({f"s{k}_{name}": np.asarray(getattr(a, name)) for name in SceneArrays.__dataclass_fields__
-                     if getattr(a, name) is not None})
-    np.savez_compressed(path, **data, **extra)
-
-
-def load_scene_arrays(path) -> list[SceneArrays]:
-    """Read what :func:`save_scene_arrays` wrote."""
-    with np.load(path) as d:
-        out = []
-        for k in range(int(d["scene_count"])):
-            f = {name: d[f"s{k}_{name}"] for name in SceneArrays.__dataclass_fields__ if f"s{k}_{name}" in d}
-            f.setdefault("weft_scale", np.ones(len(f["garment_faces"])))  # files from before waistbands
-            f["material"], f["fps"], f["lead_frames"] = str(f["material"]), float(f["fps"]), int(f["lead_frames"])
-            out.append(SceneArrays(**f))
-    return out
+                       body_face_part=face_parts(s.body.weights, s.body.faces),
+                       poses=np.asarray(motion.poses).reshape(motion.frame_count, 24, 3),
+                       trans=np.asarray(motion.trans).reshape(motion.frame_count, 3))
 
 
 def frame_schedule(config: RunConfig, lead: int, n_motion: int, fps: float) -> tuple[list[float], int]:
@@ -322,7 +354,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     control = BodyControl.from_numpy(model, np.concatenate([b[0] for b in body_frames]))
     solver.reset_body(control)
     series = {k: [] for k in METRIC_NAMES}
-    failure: list[str | None] = [None] * len(scenes)
+    failure: list[Failure | None] = [None] * len(scenes)
     failure_frame = [-1] * len(scenes)
     positions = []
     start = time.perf_counter()
@@ -348,9 +380,14 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     pos = np.stack(positions) if positions else np.zeros((0, model.particle_count, 3), np.float32)
     out = []
     scene_of = model.host.particle_scene
-    for s in range(len(scenes)):
+    first = lead + motion_from  # the body frame of the first recorded frame (a whole frame: no interpolation)
+    for s, a in enumerate(arrays):
         sel = scene_of == s
-        out.append(SceneResult(positions=pos[:, sel], faces=np.asarray(arrays[s].garment_faces),
+        rec = slice(first, first + len(pos))
+        out.append(SceneResult(positions=pos[:, sel], faces=np.asarray(a.garment_faces),
+                               body_vertices=np.asarray(a.body_frames[rec], np.float32),
+                               poses=None if a.poses is None else np.asarray(a.poses[rec]),
+                               trans=None if a.trans is None else np.asarray(a.trans[rec]), fps=fps,
                                recorded_from=recorded_from, motion_from=motion_from,
                                metrics={k: np.array([v[s] for v in series[k]]) for k in METRIC_NAMES},
                                failure=failure[s], failure_frame=failure_frame[s], seconds=seconds))

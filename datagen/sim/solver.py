@@ -7,7 +7,7 @@ with the body moving linearly from the previous control to ``control`` within th
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -69,8 +69,8 @@ class SolverConfig:
             per-launch cost. Off, or on a CPU, every launch is made from Python.
     """
 
-    substeps: int = 10
-    iterations: int = 20
+    substeps: int = field(default=10, metadata={"min": 1, "max": 200})
+    iterations: int = field(default=20, metadata={"min": 1, "max": 200})
     gravity: tuple[float, float, float] = (0.0, -9.81, 0.0)
     air_drag: float = 0.02
     body_stiffness: float = 1.0e4

@@ -65,9 +65,6 @@ def read_root_attributes(path: Path) -> dict[str, Any] | None:
     return attrs if isinstance(attrs, dict) else None
 
 
-def is_drape_store(path: Path) -> bool:
-    attrs = read_root_attributes(path)
-    return attrs is not None and attrs.get("format") == STORE_FORMAT
 
 
 def is_complete(path: Path) -> bool:
@@ -96,8 +93,6 @@ def chunk_layout(spec: ArraySpec, shape: tuple[int, ...], chunking: Chunking | N
     return (chunk_rows, *tail), (shard_rows, *tail)
 
 
-def specs_of_table(*tables: str) -> list[ArraySpec]:
-    return [a for a in ARRAYS.values() if a.table in tables]
 
 
 def specs_of_group(group: str) -> list[ArraySpec]:

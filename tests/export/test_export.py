@@ -19,7 +19,8 @@ from datagen.errors import InputError, MissingDependencyError
 
 MICRO = {
     "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07,
-    "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1, "substeps": 3, "iterations": 3},
+    "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
+                   "solver": {"substeps": 3, "iterations": 3}},
     # the fit model needs more than three training (garment, body) pairs
     "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
     "test": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},
@@ -147,7 +148,7 @@ def test_writer_refuses_bad_arrays_and_paths(tmp_path):
 
 def test_unwritable_directory_is_refused_before_any_work(tmp_path, monkeypatch):
     """(Permission bits do not stop root, so the check itself is exercised through os.access.)"""
-    from datagen.export import files
+    from datagen import files
     from datagen.files import check_output_dir, check_output_path
 
     monkeypatch.setattr(files.os, "access", lambda *a, **k: False)
@@ -265,29 +266,15 @@ def test_plain_array_npz_and_frame_specs(tmp_path):
             parse_frames(bad, 10)
 
 
-def test_simulate_result_gets_its_body_posed_again(tmp_path, default_body):
-    """A file as ``drape simulate`` writes it (positions, faces, names; no body): the loader poses the
-    named body over the named motion's recorded frames and makes the garment again for its regions."""
-    from datagen.body.shapes import resolve_betas
+def test_an_old_simulate_result_is_refused_with_what_to_do(tmp_path):
+    """Files of ``drape simulate`` from before it recorded the body (positions, faces, names) are
+    not rebuilt from their names: the loader says to simulate again."""
     from datagen.export.animation import from_npz
-    from datagen.garment.types import make_garment
-    from datagen.motion.library import make_motion
 
-    T, motion_from = 4, 3
-    betas = resolve_betas(default_body, body="thin")[0]
-    garment = make_garment("skirt", default_body, betas, seed=0)
-    motion = make_motion("wave", seed=0, frames=T + motion_from, fps=30.0)
-    positions = (garment.vertices[None] + motion.trans[motion_from:, None]).astype(np.float32)
-    np.savez_compressed(tmp_path / "run.npz", positions=positions, faces=garment.faces, recorded_from=20,
-                        motion_from=motion_from, failure="", failure_frame=-1, garment="skirt", motion="wave",
-                        body="thin", config="{}")
-    a = from_npz(tmp_path / "run.npz")
-    expected, _ = default_body.pose(np.repeat(betas[None], T, 0), motion.poses[motion_from:].reshape(T, -1),
-                                    motion.trans[motion_from:])
-    np.testing.assert_allclose(a.body_vertices, expected, atol=1e-6)
-    np.testing.assert_array_equal(a.region, garment.vertex_region)
-    assert a.region_names == tuple(garment.region_names) and a.skeleton is not None and a.fps == 30.0
-    assert a.metadata["motion"] == "wave" and a.metadata["body"] == "thin"
+    np.savez_compressed(tmp_path / "run.npz", positions=np.zeros((2, 3, 3), np.float32), faces=np.array([[0, 1, 2]]),
+                        garment="skirt", motion="wave", body="thin")
+    with pytest.raises(InputError, match="older drape.*run drape simulate again"):
+        from_npz(tmp_path / "run.npz")
 
 
 # ------------------------------------------------------------------------------ a real store (slow)

@@ -25,7 +25,8 @@ pytestmark = pytest.mark.slow
 
 MICRO = {
     "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07,
-    "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1, "substeps": 3, "iterations": 3},
+    "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
+                   "solver": {"substeps": 3, "iterations": 3}},
     "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
     "test": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},
 }
@@ -100,7 +101,7 @@ def test_finished_store_is_left_alone_and_other_config_refused(local_store):
     assert generate(micro(simulation={**MICRO["simulation"], "batch_size": 1}), local_store)["simulated"] == 0
     attrs = read_root_attributes(local_store)
     assert attrs["code_version"] == code_version() and len(code_version()) == 16
-    assert "batch_size" not in attrs["config"]["simulation"] and attrs["config"]["simulation"]["substeps"] == 3
+    assert "batch_size" not in attrs["config"]["simulation"] and attrs["config"]["simulation"]["solver"]["substeps"] == 3
     with pytest.raises(InputError, match="frames"):
         generate(micro(frames=7), local_store)
     after = {p: p.stat().st_mtime_ns for p in local_store.rglob("*") if p.is_file()}

@@ -8,6 +8,7 @@ import pytest
 
 import datagen.sim.scene as sc
 from datagen.errors import SimulationError
+from datagen.materials import MATERIALS
 from datagen.sim.scene import RunConfig, SceneArrays, simulate
 
 
@@ -22,7 +23,8 @@ def falling_patch(n: int = 6, T: int = 8) -> SceneArrays:
     frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), (len(faces), 1, 1))
     body = np.array([[0.0, -10.0, 0.0], [0.1, -10.0, 0.0], [0.0, -10.0, 0.1], [0.0, -9.9, 0.0]])  # far below
     body_faces = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
-    return SceneArrays(garment_vertices=verts, garment_faces=faces, material="cotton", material_frames=frames,
+    return SceneArrays(garment_vertices=verts, garment_faces=faces, material=MATERIALS["cotton"],
+                       material_frames=frames,
                        weft_scale=np.ones(len(faces)),
                        body_frames=np.repeat(body[None], T, 0), body_faces=body_faces, fps=30.0, lead_frames=0)
 

@@ -536,3 +536,18 @@ def test_full_disk_gives_a_clear_error_and_keeps_what_was_stored(tmp_path, monke
     monkeypatch.undo()
     assert not writer.is_complete and writer.missing() == []
     assert writer.pack() and validate(path) == []
+
+
+def test_reading_a_store_loads_the_reader_alone():
+    """A trainer's DataLoader workers import the reader on every worker: ``from datagen.store import
+    open_store`` must not bring in the writer (``fcntl``), the validator or the summary."""
+    import subprocess
+    import sys
+
+    code = ("import sys; from datagen.store import open_store, DatasetStore; "
+            "print(sorted(m for m in sys.modules if m.startswith('datagen') or m == 'fcntl'))")
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
+    assert "datagen.store.reader" in loaded
+    for heavy in ("datagen.store.writer", "datagen.store.validate", "datagen.store.info", "'fcntl'", "datagen.sim",
+                  "datagen.garment", "datagen.body"):
+        assert heavy not in loaded, (heavy, loaded)
