@@ -138,7 +138,9 @@ def run_scenes(args) -> None:
                                                             body_projection=not args.no_projection,
                                                             body_friction=not args.no_body_friction,
                                                             **({} if args.friction_pressure is None else
-                                                               {"friction_pressure": args.friction_pressure})))
+                                                               {"friction_pressure": args.friction_pressure}),
+                                                            **({} if args.global_iterations is None else
+                                                               {"global_iterations": args.global_iterations})))
     print(f"{len(scenes)} scenes in one batch, device {args.device}, {config}", flush=True)
     t0 = time.perf_counter()
 
@@ -151,8 +153,17 @@ def run_scenes(args) -> None:
     out = Path(args.out_dir) if args.out_dir else None
     if out:
         out.mkdir(parents=True, exist_ok=True)
-    for name, r in zip(names, results):
+    from datagen.sim.metrics import principal_strain
+
+    frames = len(results[0].metrics["nan"])
+    print(f"{1000 * results[0].seconds / frames:.1f} ms per batch frame ({frames} frames, {len(scenes)} scenes)")
+    for name, scene, r in zip(names, scenes, results):
         summary = r.summary()
+        # the largest principal strain of every triangle against the garment's rest mesh, recorded frames
+        strain = principal_strain(scene.garment.vertices, scene.garment.faces, r.positions)
+        summary.update({f"strain_{q}": float(np.percentile(strain, v)) for q, v in (("p50", 50), ("p90", 90),
+                                                                                    ("p99", 99))},
+                       strain_max=float(strain.max()), material=scene.garment.material.name)
         print(f"{name}: {json.dumps(summary)}")
         if out:
             np.savez_compressed(out / f"{name.replace('/', '_')}.npz",
@@ -195,6 +206,8 @@ def main() -> None:
     p.add_argument("--no-body-friction", action="store_true", help="turn friction with the body off (diagnosis)")
     p.add_argument("--lead-in", type=float, default=None, help="seconds (default: RunConfig's)")
     p.add_argument("--friction-pressure", type=float, default=None, help="Pa (default: SolverConfig's)")
+    p.add_argument("--global-iterations", type=int, default=None,
+                   help="conjugate-gradient iterations of the global step (default: SolverConfig's; 0: sweeps alone)")
     p.add_argument("--out-dir", default=None, help="per-scene metrics (.npz) go here")
     p.set_defaults(func=run_scenes)
     args = ap.parse_args()

@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass
 
 from datagen.errors import InputError
 
-__all__ = ["MATERIALS", "Material", "material"]
+__all__ = ["DRAPE_COEFFICIENT_RANGES", "MATERIALS", "Material", "drape_range", "material"]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,3 +103,30 @@ def material(name: str | Material) -> Material:
         return MATERIALS[name]
     except KeyError:
         raise InputError(f"unknown material {name!r}; presets: {', '.join(MATERIALS)}") from None
+
+
+DRAPE_COEFFICIENT_RANGES: dict[str, tuple[float, float]] = {
+    "silk": (0.20, 0.40),
+    "cotton": (0.40, 0.60),
+    "jersey": (0.30, 0.50),
+    "denim": (0.60, 0.85),
+    "wool": (0.50, 0.75),
+    "polyester": (0.35, 0.65),
+}
+"""Cusick drape coefficients of the real fabrics each preset stands for (30 cm specimen on an
+18 cm support, BS 5058 / ISO 9073-9), approximate ranges over published measurements: Cusick,
+"The measurement of fabric drape", J. Textile Inst. 59 (1968) 253-260; Hu and Chan, "Effect of
+fabric mechanical properties on drape", Textile Res. J. 68 (1998) 57-64 (woven apparel fabrics);
+Jeong and Phillips, "A study of fabric-drape behaviour with image analysis, part II", J. Textile
+Inst. 89 (1998) 70-79. Light silks and chiffons 0.2-0.4, cotton shirting 0.4-0.6, jersey knits
+0.3-0.5, denim 0.6-0.85, wool suiting 0.5-0.75, polyester shirting and blouse wovens 0.35-0.65
+(the widest: from soft georgettes to crisp taffetas). ``benchmarks/bench_cusick.py`` drapes every
+preset and checks it against its range."""
+
+
+def drape_range(name: str) -> tuple[float, float]:
+    """The Cusick drape-coefficient range of preset ``name`` (:data:`DRAPE_COEFFICIENT_RANGES`)."""
+    try:
+        return DRAPE_COEFFICIENT_RANGES[name]
+    except KeyError:
+        raise InputError(f"no drape-coefficient range for {name!r}; presets: {', '.join(DRAPE_COEFFICIENT_RANGES)}") from None

@@ -159,6 +159,15 @@ class GarmentMetadata:
         if self.betas is not None:
             object.__setattr__(self, "betas", tuple(float(b) for b in self.betas))
 
+    # a read-only mapping does not pickle: hand pickle a plain dict and make it read-only again
+    def __getstate__(self) -> dict:
+        return {**self.__dict__, "params": dict(self.params)}
+
+    def __setstate__(self, state: dict) -> None:
+        for k, v in state.items():
+            object.__setattr__(self, k, v)
+        object.__setattr__(self, "params", MappingProxyType(dict(state["params"])))
+
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready form; fields that are None (and empty ``params``) are left out."""
         out: dict[str, Any] = {}

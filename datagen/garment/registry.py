@@ -107,6 +107,14 @@ class GarmentType:
     side_opening: SideOpening
     top_opening: TopOpening
 
+    def __getstate__(self) -> dict:  # a read-only mapping does not pickle
+        return {**self.__dict__, "params": dict(self.params)}
+
+    def __setstate__(self, state: dict) -> None:
+        for k, v in state.items():
+            object.__setattr__(self, k, v)
+        object.__setattr__(self, "params", MappingProxyType(dict(state["params"])))
+
     def __post_init__(self):
         object.__setattr__(self, "params", MappingProxyType(dict(self.params)))
         where = f"garment type {self.name!r}"

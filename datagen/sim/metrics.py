@@ -120,6 +120,68 @@ def _slip(x: wp.array(dtype=wp.vec3), body: wp.array(dtype=wp.vec3), anchor: wp.
     out[i] = wp.length(x[i] - body[anchor[i]]) - rest_distance[i]
 
 
+def principal_strain(rest_vertices: np.ndarray, faces: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """The largest principal strain of every triangle against its rest shape: the largest singular
+    value of the deformation gradient F = Ds Dm⁻¹ minus one, [T, F] for ``positions`` [T, V, 3]
+    (or [F] for [V, 3]); rest vertices [V, 3] (m), faces [F, 3]. The measure of the physics issue's
+    strain figures (``benchmarks/garment_strain.py``)."""
+    X = np.asarray(rest_vertices, dtype=np.float64)
+    f = np.asarray(faces)
+    e1, e2 = X[f[:, 1]] - X[f[:, 0]], X[f[:, 2]] - X[f[:, 0]]
+    u = e1 / np.linalg.norm(e1, axis=1, keepdims=True)
+    n = np.cross(e1, e2)
+    w = np.cross(n / np.linalg.norm(n, axis=1, keepdims=True), u)
+    Dm = np.stack([np.stack([(e1 * u).sum(1), (e2 * u).sum(1)], 1), np.stack([(e1 * w).sum(1), (e2 * w).sum(1)], 1)],
+                  1)
+    Dinv = np.linalg.inv(Dm)  # [F, 2, 2]
+    x = np.asarray(positions, dtype=np.float64)
+    one = x.ndim == 2
+    x = x[None] if one else x
+    d1, d2 = x[:, f[:, 1]] - x[:, f[:, 0]], x[:, f[:, 2]] - x[:, f[:, 0]]
+    Fg = np.stack([d1, d2], -1) @ Dinv[None]  # [T, F, 3, 2]
+    C = np.swapaxes(Fg, -1, -2) @ Fg  # [T, F, 2, 2]
+    a, b, c = C[..., 0, 0], C[..., 1, 1], C[..., 0, 1]
+    out = np.sqrt(0.5 * (a + b) + np.sqrt(0.25 * (a - b) ** 2 + c**2)) - 1.0
+    return out[0] if one else out
+
+
+def elastic_energy(host, x: np.ndarray) -> float:
+    """The cloth's stored elastic energy [J] at positions ``x`` [N, 3] (m): the membrane's
+    orthotropic StVK and lock energies and the hinges' bending energy, as the solver's kernels
+    define them, from a model's host arrays (:class:`~datagen.sim.model.ClothHostArrays`).
+
+    With the kinetic energy and the work of gravity it makes the mechanical energy balance that a
+    dissipative solver can only lower with a static support (``benchmarks/bench_convergence.py``,
+    ``tests/sim/test_physics.py``)."""
+    x = np.asarray(x, dtype=np.float64)
+    F, D = host.faces, host.dm_inv
+    e1, e2 = x[F[:, 1]] - x[F[:, 0]], x[F[:, 2]] - x[F[:, 0]]
+    f0 = e1 * D[:, 0, 0, None] + e2 * D[:, 1, 0, None]
+    f1 = e1 * D[:, 0, 1, None] + e2 * D[:, 1, 1, None]
+    a, b, c = (f0 * f0).sum(1), (f1 * f1).sum(1), (f0 * f1).sum(1)
+    g00, g11, g01 = 0.5 * (a - 1), 0.5 * (b - 1), 0.5 * c
+    k = host.tri_stiff
+    psi = 0.5 * k[:, 0] * g00**2 + 0.5 * k[:, 1] * g11**2 + k[:, 2] * g00 * g11 + 2 * k[:, 3] * g01**2
+    # the lock: kA/2 Σ (λ - λ_lock)² over the principal stretches above λ_lock
+    mean, rad = 0.5 * (a + b), np.sqrt(0.25 * (a - b) ** 2 + c**2)
+    lam = np.sqrt(np.maximum(np.stack([mean + rad, mean - rad], 1), 0.0))
+    over = np.maximum(lam - host.tri_lock[:, :1], 0.0)
+    psi = psi + 0.5 * host.tri_lock[:, 1] * (over**2).sum(1)
+    energy = float((psi * host.tri_area).sum())
+    E = host.edges
+    inner = (E[:, 2] >= 0) & (E[:, 3] >= 0)
+    if inner.any():
+        x0, x1, x2, x3 = (x[E[inner, j]] for j in range(4))
+        ed = x1 - x0
+        n1, n2 = np.cross(ed, x2 - x0), np.cross(x3 - x0, ed)
+        n1 /= np.linalg.norm(n1, axis=1, keepdims=True)
+        n2 /= np.linalg.norm(n2, axis=1, keepdims=True)
+        eh = ed / np.linalg.norm(ed, axis=1, keepdims=True)
+        theta = np.arctan2((np.cross(n1, n2) * eh).sum(1), (n1 * n2).sum(1))
+        energy += float((0.5 * host.bend_k[inner] * (theta - host.rest_angle[inner]) ** 2).sum())
+    return energy
+
+
 class Metrics:
     """Measures every scene of a model each frame (arrays on the model's device)."""
 

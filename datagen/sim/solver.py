@@ -46,6 +46,9 @@ class SolverConfig:
         friction_velocity: velocity below which friction is smoothed (static) [m/s].
         contact_capacity: initial contacts stored per vertex, triangle and edge (grows on demand).
         chebyshev_rho: spectral radius estimate for Chebyshev acceleration of the sweeps (0: off).
+        global_iterations: conjugate-gradient iterations of the global Newton step that starts every
+            substep (:mod:`datagen.sim.newton_kernels`; 0: off, the sweeps alone). The sweeps carry
+            a load one vertex per sweep; woven cloth needs it carried across the garment at once.
         body_projection: at the end of every substep, move vertices that ended inside the body
             (winding-number test) out to its surface and take their inward velocity (see
             ``kernels.project_out_of_body``).
@@ -92,6 +95,7 @@ class SolverConfig:
     body_friction: bool = True
     friction_pressure: float = 1000.0
     cuda_graph: bool = True
+    global_iterations: int = field(default=20, metadata={"min": 0, "max": 1000})
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -132,6 +136,10 @@ class SolverVBD:
             self.min_dist = wp.zeros(n, dtype=float)
             self.friction_used = wp.zeros(n, dtype=float)
             self.v_old = z3(n)
+            if self.config.global_iterations:  # the global step's vectors, blocks and per-scene scalars
+                self.cg_force, self.cg_r, self.cg_z, self.cg_p, self.cg_q, self.cg_d = (z3(n) for _ in range(6))
+                self.cg_diag_other, self.cg_diag_el, self.cg_inverse = (wp.zeros(n, dtype=wp.mat33) for _ in range(3))
+                self.cg_rz, self.cg_rz_new, self.cg_pq = (wp.zeros(m.scene_count, dtype=wp.float64) for _ in range(3))
             P = m.body_part_count
             self.body_lambda = wp.zeros((n, P), dtype=float)
             # copies of what a step carries over from the last besides the state, for a redo
@@ -264,6 +272,10 @@ class SolverVBD:
             if len(graphs) > 8:
                 graphs.clear()
             wp.load_module(self.K, device=dev)  # compile before capturing
+            if self.config.global_iterations:
+                from datagen.sim import newton_kernels
+
+                wp.load_module(newton_kernels, device=dev)
             with wp.ScopedDevice(dev), wp.ScopedCapture(device=dev) as capture:
                 self._step(state, control, dt)
             graphs[key] = (capture.graph, state, control)  # keep the arrays the graph reads alive
@@ -305,6 +317,46 @@ class SolverVBD:
             wp.launch(K.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
         wp.launch(K.finish_bounds, n, inputs=[self.min_dist, c.bound_fraction, c.self_bound_floor, self.bound])
 
+    def _global_step(self, x, h: float) -> None:
+        """One Newton step of the substep's incremental potential from the initial guess ``x``,
+        solved by block-Jacobi preconditioned conjugate gradients (per scene), each vertex's move
+        kept within its conservative bound (see :mod:`datagen.sim.newton_kernels`)."""
+        import warp as wp
+
+        from datagen.sim import newton_kernels as N
+
+        m, c = self.model, self.config
+        n, nf, ne = m.particle_count, m.face_count, m.edge_count
+        eps_u = c.friction_velocity * h
+        wp.launch(N.vertex_force_diagonal, n, inputs=[
+            x, self.x_prev, self.y, m.mass, m.active, m.damping, m.faces, m.dm_inv, m.tri_area, m.tri_stiff,
+            m.tri_lock, m.edges, m.rest_angle, m.bend_k, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
+            self.body_has, self.body_point, self.body_normal, self.body_radius, c.body_stiffness, eps_u, h,
+            self.cg_force, self.cg_diag_other])
+        self.cg_diag_el.zero_()
+        p, q = self.cg_p, self.cg_q
+        wp.launch(N.membrane_product, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h, p, 1,
+                                                  q, self.cg_diag_el])
+        wp.launch(N.bending_product, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, p, 1, q, self.cg_diag_el])
+        wp.launch(N.invert_blocks, n, inputs=[self.cg_diag_other, self.cg_diag_el, m.active, self.cg_inverse])
+        rz, rz_new = self.cg_rz, self.cg_rz_new
+        rz.zero_()
+        wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, m.particle_scene, self.cg_r,
+                                         self.cg_z, p, self.cg_d, rz])
+        for _ in range(c.global_iterations):
+            wp.launch(N.diagonal_product, n, inputs=[self.cg_diag_other, p, m.active, q])
+            wp.launch(N.membrane_product, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
+                                                      p, 0, q, self.cg_diag_el])
+            wp.launch(N.bending_product, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, p, 0, q, self.cg_diag_el])
+            self.cg_pq.zero_()
+            wp.launch(N.scene_dot, n, inputs=[p, q, m.particle_scene, self.cg_pq])
+            rz_new.zero_()
+            wp.launch(N.cg_step, n, inputs=[p, q, self.cg_inverse, m.particle_scene, rz, self.cg_pq, self.cg_d,
+                                            self.cg_r, self.cg_z, rz_new])
+            wp.launch(N.cg_direction, n, inputs=[self.cg_z, m.particle_scene, rz, rz_new, p])
+            rz, rz_new = rz_new, rz
+        wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
+
     def _step(self, state, control, dt: float) -> None:
         import warp as wp
 
@@ -338,6 +390,8 @@ class SolverVBD:
                 self._detect_self()
                 wp.launch(K.initial_guess, n, inputs=[self.x_det, self.y, v, self.v_old, wp.vec3(*c.gravity), h,
                                                      self.body_lambda, self.bound, m.active, x])
+                if c.global_iterations:
+                    self._global_step(x, h)
                 wp.copy(self.x_nm1, x)
                 omega, cheb = 1.0, 0
                 rho = c.chebyshev_rho

@@ -158,3 +158,21 @@ def test_npz_without_drape_metadata_still_loads(default_body, tmp_path):
         np.savez(fh, **arrays)
     with pytest.raises(InputError, match=r"odd.npz: garment metadata has unknown key\(s\) 'colour'"):
         load_garment(tmp_path / "odd.npz")
+
+
+def test_garments_and_types_pickle(default_body):
+    """Scenes travel pickled (the benchmarks' prepared runs, Ray): a garment and a type record come
+    back equal, their read-only parameter mappings read-only again."""
+    import pickle
+
+    from datagen.garment.types import make_garment
+
+    g = make_garment("shorts", default_body, seed=1)
+    back = pickle.loads(pickle.dumps(g))
+    assert back.metadata == g.metadata and np.array_equal(back.vertices, g.vertices)
+    with pytest.raises(TypeError):
+        back.metadata.params["hem"] = 0.0
+    t = pickle.loads(pickle.dumps(GARMENT_TYPES["shorts"]))
+    assert t == GARMENT_TYPES["shorts"]
+    with pytest.raises(TypeError):
+        t.params["hem"] = None

@@ -1,0 +1,329 @@
+"""Warp kernels of the solver's global step: one Newton step of the whole substep's incremental
+potential, solved by preconditioned conjugate gradients, before the vertex block descent sweeps.
+
+Why: a vertex block descent sweep carries a load one vertex further, so woven cloth (membrane
+stiffness k in the thousands of N/m against an inertia m/h² of about 1 N/m per vertex) needs
+hundreds of sweeps before a garment's weight reaches the seam that carries it; at the production 20
+sweeps a hanging cotton strip stretched 7x its static answer and oscillated without end, and its
+mechanical energy rose (``benchmarks/bench_convergence.py``). Conjugate gradients carry it across the
+whole cloth in a few dozen matrix products, as implicit Euler solvers have done since Baraff and
+Witkin (1998); the sweeps that follow add what the global step leaves out (cloth-cloth contacts,
+body friction, the lock's kinks) and keep the conservative bounds.
+
+The system is the incremental potential's Gauss-Newton Hessian at the substep's initial guess x₀:
+
+    (M/h² + H_membrane + H_bending + D_other) d = f(x₀)
+
+with H_membrane the full (all corner pairs) Gauss-Newton Hessian of the orthotropic StVK energy
+plus its geometric part with the 2nd Piola stress projected to be positive semi-definite, both
+times (1 + k_d/h) for Rayleigh damping; H_bending the hinges' Gauss-Newton Hessian k ∇θ∇θᵀ
+(1 + k_d/h); and D_other the per-vertex blocks of the lock and the body contact penalty. f(x₀) is
+the full force of those energies and inertia. The preconditioner is the block diagonal (each
+vertex's 3x3). The matrix is applied element by element, never assembled.
+
+Every scene of a batch has its own scalars (the products and step lengths of its own
+conjugate-gradient iteration), so a scene's result does not depend on what else is in its batch.
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+from datagen.sim.kernels import bending_force_hessian, contact_force_hessian, lock_force_hessian, membrane_force_hessian
+
+
+@wp.func
+def _corner_weights(D: wp.mat22, local: int) -> wp.vec2:
+    c = wp.vec2(-(D[0, 0] + D[1, 0]), -(D[0, 1] + D[1, 1]))
+    if local == 1:
+        c = wp.vec2(D[0, 0], D[0, 1])
+    elif local == 2:
+        c = wp.vec2(D[1, 0], D[1, 1])
+    return c
+
+
+@wp.func
+def _psd_stress(s00: float, s01: float, s11: float) -> wp.mat22:
+    """The 2x2 stress with its negative principal values set to zero (compression carries no
+    geometric stiffness: the Hessian stays positive semi-definite)."""
+    mean = 0.5 * (s00 + s11)
+    rad = wp.sqrt(0.25 * (s00 - s11) * (s00 - s11) + s01 * s01)
+    l1 = mean + rad
+    l2 = mean - rad
+    if l2 >= 0.0:
+        return wp.mat22(s00, s01, s01, s11)
+    if l1 <= 0.0:
+        return wp.mat22(0.0, 0.0, 0.0, 0.0)
+    # keep l1 only: l1 v vᵀ with v the eigenvector of l1
+    v = wp.vec2(1.0, 0.0)
+    if rad > 1.0e-20:
+        if s00 >= s11:
+            v = wp.normalize(wp.vec2(l1 - s11, s01))
+        else:
+            v = wp.normalize(wp.vec2(s01, l1 - s00))
+    return wp.mat22(l1 * v[0] * v[0], l1 * v[0] * v[1], l1 * v[0] * v[1], l1 * v[1] * v[1])
+
+
+@wp.kernel
+def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
+                          inertia_target: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
+                          active: wp.array(dtype=wp.int32), damping: wp.array(dtype=float),
+                          faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
+                          tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                          tri_lock: wp.array(dtype=wp.vec2), edges: wp.array2d(dtype=wp.int32),
+                          rest_angle: wp.array(dtype=float), bend_k: wp.array(dtype=float),
+                          v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
+                          v2e_offsets: wp.array(dtype=wp.int32), v2e: wp.array2d(dtype=wp.int32),
+                          body_has: wp.array2d(dtype=wp.int32), body_point: wp.array2d(dtype=wp.vec3),
+                          body_normal: wp.array2d(dtype=wp.vec3), body_radius: wp.array(dtype=float),
+                          body_k: float, eps_u: float, h: float,
+                          force_out: wp.array(dtype=wp.vec3), diag_other: wp.array(dtype=wp.mat33)):
+    """Every vertex's force (inertia, membrane with lock and damping, bending, body contact) and the
+    3x3 block of the Hessian that the element products do not give (inertia, lock, body contact)."""
+    i = wp.tid()
+    if active[i] == 0:
+        force_out[i] = wp.vec3(0.0)
+        diag_other[i] = wp.identity(n=3, dtype=float)
+        return
+    xi = x[i]
+    m_h2 = mass[i] / (h * h)
+    force = (inertia_target[i] - xi) * m_h2
+    hess = wp.identity(n=3, dtype=float) * m_h2
+    kd = damping[i]
+    for k in range(v2f_offsets[i], v2f_offsets[i + 1]):
+        f = v2f[k, 0]
+        local = v2f[k, 1]
+        fm, hm = membrane_force_hessian(i, local, f, x, x_prev, faces, dm_inv, tri_area, tri_stiff, tri_lock, kd, h)
+        force += fm
+        lk = tri_lock[f]
+        if lk[1] > 0.0:
+            D = dm_inv[f]
+            x0 = x[faces[f, 0]]
+            x1 = x[faces[f, 1]]
+            x2 = x[faces[f, 2]]
+            f0 = (x1 - x0) * D[0, 0] + (x2 - x0) * D[1, 0]
+            f1 = (x1 - x0) * D[0, 1] + (x2 - x0) * D[1, 1]
+            fl, hl = lock_force_hessian(f0, f1, _corner_weights(D, local), lk[0], lk[1] * tri_area[f])
+            hess += hl
+    for k in range(v2e_offsets[i], v2e_offsets[i + 1]):
+        e = v2e[k, 0]
+        if edges[e, 2] >= 0 and edges[e, 3] >= 0:
+            fb, hb = bending_force_hessian(i, v2e[k, 1], e, x, x_prev, edges, rest_angle, bend_k, kd, h)
+            force += fb
+    r = body_radius[i]
+    for p in range(body_has.shape[1]):
+        if body_has[i, p] == 1:
+            n = body_normal[i, p]
+            dist = wp.dot(xi - body_point[i, p], n)
+            if dist < r:
+                fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0)
+                force += fc
+                hess += hc
+    force_out[i] = force
+    diag_other[i] = hess
+
+
+@wp.kernel
+def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
+                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                     damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3),
+                     diagonal: int, out: wp.array(dtype=wp.vec3), out_diag: wp.array(dtype=wp.mat33)):
+    """Add H_membrane p of every triangle to ``out`` (or, with ``diagonal``, its three 3x3 diagonal
+    blocks to ``out_diag``): orthotropic StVK Gauss-Newton with the PSD-projected geometric part,
+    times 1 + k_d/h."""
+    f = wp.tid()
+    i0 = faces[f, 0]
+    i1 = faces[f, 1]
+    i2 = faces[f, 2]
+    x0 = x[i0]
+    D = dm_inv[f]
+    f0 = (x[i1] - x0) * D[0, 0] + (x[i2] - x0) * D[1, 0]
+    f1 = (x[i1] - x0) * D[0, 1] + (x[i2] - x0) * D[1, 1]
+    k = tri_stiff[f]
+    g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
+    g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
+    g01 = 0.5 * wp.dot(f0, f1)
+    S = _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
+    A = tri_area[f] * (1.0 + damping[i0] / h)
+    c0 = _corner_weights(D, 0)
+    c1 = _corner_weights(D, 1)
+    c2 = _corner_weights(D, 2)
+    if diagonal != 0:
+        for j in range(3):
+            c = c0
+            idx = i0
+            if j == 1:
+                c = c1
+                idx = i1
+            elif j == 2:
+                c = c2
+                idx = i2
+            a = f0 * c[0]
+            b = f1 * c[1]
+            s = f0 * c[1] + f1 * c[0]
+            blk = (wp.outer(a, a) * k[0] + wp.outer(b, b) * k[1] + (wp.outer(a, b) + wp.outer(b, a)) * k[2]
+                   + wp.outer(s, s) * k[3])
+            geo = c[0] * (S[0, 0] * c[0] + S[0, 1] * c[1]) + c[1] * (S[1, 0] * c[0] + S[1, 1] * c[1])
+            blk = blk + wp.identity(n=3, dtype=float) * geo
+            wp.atomic_add(out_diag, idx, blk * A)
+        return
+    p0 = p[i0]
+    p1 = p[i1]
+    p2 = p[i2]
+    df0 = p0 * c0[0] + p1 * c1[0] + p2 * c2[0]
+    df1 = p0 * c0[1] + p1 * c1[1] + p2 * c2[1]
+    al = wp.dot(f0, df0)
+    be = wp.dot(f1, df1)
+    sg = wp.dot(f0, df1) + wp.dot(f1, df0)
+    ta = k[0] * al + k[2] * be
+    tb = k[1] * be + k[2] * al
+    ts = k[3] * sg
+    # geometric part: Σ_k (c_jᵀ S c_k) p_k = (dF S) c_j with dF = [df0 df1]
+    g0 = df0 * S[0, 0] + df1 * S[1, 0]
+    g1 = df0 * S[0, 1] + df1 * S[1, 1]
+    for j in range(3):
+        c = c0
+        idx = i0
+        if j == 1:
+            c = c1
+            idx = i1
+        elif j == 2:
+            c = c2
+            idx = i2
+        val = f0 * (c[0] * ta + c[1] * ts) + f1 * (c[1] * tb + c[0] * ts) + g0 * c[0] + g1 * c[1]
+        wp.atomic_add(out, idx, val * A)
+
+
+@wp.kernel
+def bending_product(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), bend_k: wp.array(dtype=float),
+                    damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3), diagonal: int,
+                    out: wp.array(dtype=wp.vec3), out_diag: wp.array(dtype=wp.mat33)):
+    """Add the hinges' Gauss-Newton Hessian k (1 + k_d/h) ∇θ∇θᵀ times p (or its diagonal blocks)."""
+    e = wp.tid()
+    if edges[e, 2] < 0 or edges[e, 3] < 0:
+        return
+    i0 = edges[e, 0]
+    i1 = edges[e, 1]
+    i2 = edges[e, 2]
+    i3 = edges[e, 3]
+    x0 = x[i0]
+    x1 = x[i1]
+    x2 = x[i2]
+    x3 = x[i3]
+    E = x1 - x0
+    L = wp.length(E)
+    N1 = wp.cross(E, x2 - x0)
+    N2 = wp.cross(x3 - x0, E)
+    n1sq = wp.dot(N1, N1)
+    n2sq = wp.dot(N2, N2)
+    if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
+        return
+    Eh = E / L
+    a = N1 / n1sq
+    b = N2 / n2sq
+    g0 = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
+    g1 = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
+    g2 = -a * L
+    g3 = -b * L
+    k = bend_k[e] * (1.0 + damping[i0] / h)
+    if diagonal != 0:
+        wp.atomic_add(out_diag, i0, wp.outer(g0, g0) * k)
+        wp.atomic_add(out_diag, i1, wp.outer(g1, g1) * k)
+        wp.atomic_add(out_diag, i2, wp.outer(g2, g2) * k)
+        wp.atomic_add(out_diag, i3, wp.outer(g3, g3) * k)
+        return
+    s = k * (wp.dot(g0, p[i0]) + wp.dot(g1, p[i1]) + wp.dot(g2, p[i2]) + wp.dot(g3, p[i3]))
+    wp.atomic_add(out, i0, g0 * s)
+    wp.atomic_add(out, i1, g1 * s)
+    wp.atomic_add(out, i2, g2 * s)
+    wp.atomic_add(out, i3, g3 * s)
+
+
+@wp.kernel
+def diagonal_product(diag: wp.array(dtype=wp.mat33), p: wp.array(dtype=wp.vec3), active: wp.array(dtype=wp.int32),
+                     out: wp.array(dtype=wp.vec3)):
+    """out = D p per vertex (the start of a product: the element kernels add to it)."""
+    i = wp.tid()
+    out[i] = diag[i] * p[i]
+
+
+@wp.kernel
+def invert_blocks(diag_other: wp.array(dtype=wp.mat33), diag_elements: wp.array(dtype=wp.mat33),
+                  active: wp.array(dtype=wp.int32), inverse: wp.array(dtype=wp.mat33)):
+    """The preconditioner: each vertex's full 3x3 diagonal block, inverted (zero for pinned vertices)."""
+    i = wp.tid()
+    blk = diag_other[i] + diag_elements[i]
+    if active[i] == 0 or wp.abs(wp.determinant(blk)) < 1.0e-30:
+        inverse[i] = wp.mat33(0.0)
+    else:
+        inverse[i] = wp.inverse(blk)
+
+
+@wp.kernel
+def cg_start(force: wp.array(dtype=wp.vec3), inverse: wp.array(dtype=wp.mat33), active: wp.array(dtype=wp.int32),
+             scene: wp.array(dtype=wp.int32), r: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3),
+             p: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), rz: wp.array(dtype=wp.float64)):
+    """d = 0, r = f, z = P⁻¹ r, p = z; per scene rz = Σ r·z."""
+    i = wp.tid()
+    ri = force[i]
+    if active[i] == 0:
+        ri = wp.vec3(0.0)
+    zi = inverse[i] * ri
+    r[i] = ri
+    z[i] = zi
+    p[i] = zi
+    d[i] = wp.vec3(0.0)
+    wp.atomic_add(rz, scene[i], wp.float64(wp.dot(ri, zi)))
+
+
+@wp.kernel
+def scene_dot(a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
+              out: wp.array(dtype=wp.float64)):
+    i = wp.tid()
+    wp.atomic_add(out, scene[i], wp.float64(wp.dot(a[i], b[i])))
+
+
+@wp.kernel
+def cg_step(p: wp.array(dtype=wp.vec3), q: wp.array(dtype=wp.vec3), inverse: wp.array(dtype=wp.mat33),
+            scene: wp.array(dtype=wp.int32), rz: wp.array(dtype=wp.float64), pq: wp.array(dtype=wp.float64),
+            d: wp.array(dtype=wp.vec3), r: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3),
+            rz_new: wp.array(dtype=wp.float64)):
+    """α = rz/pq of the vertex's scene; d += α p; r -= α q; z = P⁻¹ r; per scene rz_new = Σ r·z."""
+    i = wp.tid()
+    s = scene[i]
+    alpha = float(0.0)
+    if pq[s] > wp.float64(0.0):
+        alpha = float(rz[s] / pq[s])
+    d[i] = d[i] + p[i] * alpha
+    ri = r[i] - q[i] * alpha
+    zi = inverse[i] * ri
+    r[i] = ri
+    z[i] = zi
+    wp.atomic_add(rz_new, s, wp.float64(wp.dot(ri, zi)))
+
+
+@wp.kernel
+def cg_direction(z: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), rz: wp.array(dtype=wp.float64),
+                 rz_new: wp.array(dtype=wp.float64), p: wp.array(dtype=wp.vec3)):
+    """p = z + β p with β = rz_new/rz of the vertex's scene."""
+    i = wp.tid()
+    s = scene[i]
+    beta = float(0.0)
+    if rz[s] > wp.float64(0.0):
+        beta = float(rz_new[s] / rz[s])
+    p[i] = z[i] + p[i] * beta
+
+
+@wp.kernel
+def apply_step(d: wp.array(dtype=wp.vec3), x_det: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float),
+               active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
+    """x += d, each vertex's move from its detection position kept within its conservative bound."""
+    i = wp.tid()
+    if active[i] == 0:
+        return
+    new = x[i] + d[i]
+    move = new - x_det[i]
+    L = wp.length(move)
+    if L > bound[i]:
+        new = x_det[i] + move * (bound[i] / L)
+    x[i] = new
