@@ -25,13 +25,16 @@ log = logging.getLogger(__name__)
 
 def garment_cache_key(kind: str, seed: int, body_model, betas, target_edge_length: float | None) -> str:
     """Hash of what the build reads: type, seed, edge length (the type's default resolved), builder
-version, shaped body."""
+version, the type's material preset as it is now (a re-fitted preset is a new key: the cached
+garment carries its material), shaped body."""
     from datagen.garment.types import BUILDER_VERSION, GARMENT_TYPES, default_edge_length
+    from datagen.materials import material
 
     if target_edge_length is None and kind in GARMENT_TYPES:  # resolved: a changed default is a new key
         target_edge_length = default_edge_length(kind)
     betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
-    h = hashlib.sha256(json.dumps([kind, int(seed), target_edge_length, BUILDER_VERSION]).encode())
+    preset = material(GARMENT_TYPES[kind].material).as_dict() if kind in GARMENT_TYPES else None
+    h = hashlib.sha256(json.dumps([kind, int(seed), target_edge_length, BUILDER_VERSION, preset]).encode())
     h.update(np.ascontiguousarray(np.asarray(body_model.shaped(betas))[0], dtype=np.float64).tobytes())
     h.update(np.ascontiguousarray(body_model.faces, dtype=np.int64).tobytes())
     return h.hexdigest()[:20]

@@ -37,7 +37,9 @@ class FailureThresholds:
         penetration_share: share of garment vertices inside the body.
         penetration_depth: depth of the deepest vertex inside the body [m].
         self_intersections: edge-triangle crossings of the cloth with itself.
-        stretch: largest principal stretch minus one (strain blow-up).
+        stretch: largest principal stretch minus one (strain blow-up), a cap on the materials' own
+            limits (:attr:`~datagen.materials.Material.max_strain`): a scene fails beyond the
+            smaller of the two.
         slip: mean distance the garment's top band has moved away from its body anchors [m].
     """
 
@@ -202,6 +204,9 @@ class Metrics:
         self._face_scene = self._scene[h.faces[:, 0]]
         self._edge_scene = self._scene[h.edges[:, 0]]
         self._counts = np.bincount(self._scene, minlength=m.scene_count)
+        # every scene's stretch gate: the smallest strain limit of its materials
+        self._max_strain = np.full(m.scene_count, np.inf)
+        np.minimum.at(self._max_strain, self._scene, m.host.max_strain)
         # slip: each vertex's closest body vertex at rest (its scene's body), and the top band
         from scipy.spatial import cKDTree
 
@@ -280,7 +285,8 @@ class Metrics:
         if frame["slip"][scene] > thresholds.slip:
             return Failure("slip", f"the garment's top moved {frame['slip'][scene] * 100:.1f} cm off the body "
                            f"points that carry it (limit {thresholds.slip * 100:.0f} cm): it is sliding off the body")
-        if frame["stretch_max"][scene] > thresholds.stretch:
+        limit = min(thresholds.stretch, float(self._max_strain[scene]))
+        if frame["stretch_max"][scene] > limit:
             return Failure("stretch", f"a triangle stretched by {frame['stretch_max'][scene]:.0%} "
-                           f"(limit {thresholds.stretch:.0%})")
+                           f"(limit {limit:.0%})")
         return None

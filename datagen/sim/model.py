@@ -61,6 +61,8 @@ class ClothHostArrays:
     """Coulomb friction coefficient of the vertex's material [-], [N]."""
     thickness: np.ndarray
     """Material thickness [m], [N] (the body contact distance less the solver's margin)."""
+    max_strain: np.ndarray
+    """The largest principal strain the vertex's material allows [-], [N] (the stretch gate)."""
     # membrane
     faces: np.ndarray
     """Triangles (global vertex ids), [F, 3]."""
@@ -257,6 +259,7 @@ class _VertexMaterial:
     damping: np.ndarray
     friction: np.ndarray
     thickness: np.ndarray
+    max_strain: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -375,7 +378,7 @@ class ClothModelBuilder:
         host = ClothHostArrays(
             rest_positions=g.X, mass=membrane.mass, vertex_area=membrane.vertex_area, active=g.active,
             particle_scene=g.scene, damping=vertex.damping, friction=vertex.friction, thickness=vertex.thickness,
-            faces=g.F, dm_inv=membrane.dm_inv, tri_area=membrane.tri_area, tri_stiff=membrane.tri_stiff,
+            max_strain=vertex.max_strain, faces=g.F, dm_inv=membrane.dm_inv, tri_area=membrane.tri_area, tri_stiff=membrane.tri_stiff,
             tri_lock=membrane.tri_lock, edges=topo.edges, edge_pairs=bending.edge_pairs,
             rest_angle=bending.rest_angle, bend_k=bending.bend_k, v2f_offsets=topo.v2f_offsets, v2f=topo.v2f,
             v2e_offsets=topo.v2e_offsets, v2e=topo.v2e, nbr_offsets=topo.nbr_offsets, nbr=topo.nbr,
@@ -474,14 +477,15 @@ def _membrane(g: _Gathered) -> _Membrane:
 
 
 def _vertex_materials(g: _Gathered) -> _VertexMaterial:
-    """The material of every vertex (that of the last face listing it) and its damping, friction
-    and thickness."""
+    """The material of every vertex (that of the last face listing it) and its damping, friction,
+    thickness and strain limit."""
     vmat = np.zeros(len(g.X), dtype=np.int64)
     for c in range(3):
         vmat[g.F[:, c]] = g.face_material
     return _VertexMaterial(material=vmat, damping=np.array([m.damping for m in g.materials])[vmat],
                            friction=np.array([m.friction for m in g.materials])[vmat],
-                           thickness=np.array([m.thickness for m in g.materials])[vmat])
+                           thickness=np.array([m.thickness for m in g.materials])[vmat],
+                           max_strain=np.array([m.max_strain for m in g.materials])[vmat])
 
 
 def _bending(X: np.ndarray, E: np.ndarray, mats: list, vertex_material: np.ndarray) -> _Bending:

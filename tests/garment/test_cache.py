@@ -79,3 +79,18 @@ def test_old_cache_entries_load_or_are_rebuilt(default_body, tmp_path, monkeypat
         rebuilt = cached_garment("skirt", default_body, betas, seed=5)
     assert "rebuilding" in caplog.text and "colour" in caplog.text
     _same(built, rebuilt)
+
+
+def test_a_refitted_material_preset_is_a_new_cache_key(default_body, monkeypatch):
+    """A cached garment carries its material: when a preset is re-fitted, the garments of the
+    types that use it must be built again, not read back with the old material."""
+    import datagen.materials as materials
+    from datagen.garment.cache import garment_cache_key
+
+    before = garment_cache_key("skirt", 0, default_body, None, None)
+    other = garment_cache_key("tshirt", 0, default_body, None, None)
+    refit = dict(materials.MATERIALS)
+    refit["cotton"] = dataclasses.replace(refit["cotton"], bending=refit["cotton"].bending / 2)
+    monkeypatch.setattr(materials, "MATERIALS", refit)
+    assert garment_cache_key("skirt", 0, default_body, None, None) != before  # skirts are cotton
+    assert garment_cache_key("tshirt", 0, default_body, None, None) == other  # T-shirts are jersey
