@@ -29,6 +29,9 @@ def main() -> None:
     for i in range(len(store)):
         sc = store.scalars(i)
         if int(sc["failure"]) != 0:
+            g = store.garment(int(sc["garment"]))
+            print(f"{i:6d} {types[int(g['type'])]:<14} failed: {store.names['failure_names'][int(sc['failure'])]} at "
+                  f"frame {int(sc['failure_frame'])}")
             continue
         g = store.garment(int(sc["garment"]))
         x = store.sample(i, names=["detail"])["detail"][::args.every]
