@@ -177,6 +177,14 @@ _SKIRT = {
 _LAPEL = ParamSpec(0.12, 0.22, "open front from the front neckline down to the top button (m); closed below it")
 
 # the silhouettes, field by field; a record spreads one and sets the rest
+_WAIST_EASE = {
+    "ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
+    "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
+}
+_WAIST_DROP = {"waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)")}
+"""The style parameters of every garment that hangs from the waist (skirts, pants, shorts); spread
+where each type had them, so every type's parameters keep their draw order."""
+
 _SLEEVED_TOP = {"hangs_from": "shoulders", "sleeves": True, "skirt": False, "separate_legs": False,
                 "open_front": False, "hem_from": "hips", "hem_floor_below_knee": None, "panels": "top",
                 "side_opening": "cuff", "top_opening": "neck"}
@@ -225,34 +233,30 @@ _RECORDS = (
                 material="silk", boundary_loops=4, edge_length=0.02, area_guess=1.8,
                 **{**_SLEEVELESS_TOP, "skirt": True}),
     GarmentType(name="skirt", code=6,
-                params={"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                        "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
-                        "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                params={**_WAIST_EASE,
+                        **_WAIST_DROP,
                         "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"),
                         "flare": ParamSpec(0.0, 0.06, "widening per metre below the hips (straight cut)")},
                 material="cotton", boundary_loops=2, edge_length=0.013, area_guess=0.8, **_SKIRT_ONLY),
     GarmentType(name="flared_skirt", code=7,
-                params={"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                        "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
-                        "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                params={**_WAIST_EASE,
+                        **_WAIST_DROP,
                         "hem": ParamSpec(0.2, 0.4, "hem below the hip joints (m)"),
                         "flare": ParamSpec(0.3, 0.7, "widening per metre below the hips (A-line to circle)")},
                 material="silk", boundary_loops=2, edge_length=0.015, area_guess=1.0, **_SKIRT_ONLY),
     GarmentType(name="pants", code=8,
-                params={"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                        "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
+                params={**_WAIST_EASE,
                         "leg_ease": ParamSpec(0.015, 0.04, "clearance around the thigh (m)"),
                         "hem_ease": ParamSpec(0.02, 0.06, "clearance at the hem (m)"),
-                        "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                        **_WAIST_DROP,
                         "hem": ParamSpec(0.02, 0.1, "hem above the ankle joints (m)")},
                 material="denim", boundary_loops=3, edge_length=0.02, area_guess=1.5,
                 **{**_LEGS, "hem_from": "ankles"}),
     GarmentType(name="shorts", code=9,
-                params={"ease_waist": ParamSpec(0.01, 0.03, "clearance at the waist (m)"),
-                        "ease_hip": ParamSpec(0.015, 0.04, "clearance at the hips (m)"),
+                params={**_WAIST_EASE,
                         "leg_ease": ParamSpec(0.02, 0.05, "clearance around the thigh (m)"),
                         "hem_ease": ParamSpec(0.025, 0.06, "clearance at the hem (m)"),
-                        "waist": ParamSpec(0.0, 0.06, "waistband below the navel line (m)"),
+                        **_WAIST_DROP,
                         "hem": ParamSpec(0.25, 0.36, "hem below the hip joints (m)")},
                 material="cotton", boundary_loops=3, edge_length=0.015, area_guess=0.8, **_LEGS),
 )

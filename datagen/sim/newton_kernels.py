@@ -145,19 +145,10 @@ def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
     g01 = 0.5 * wp.dot(f0, f1)
     S = _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
     A = tri_area[f] * (1.0 + damping[i0] / h)
-    c0 = _corner_weights(D, 0)
-    c1 = _corner_weights(D, 1)
-    c2 = _corner_weights(D, 2)
     if diagonal != 0:
         for j in range(3):
-            c = c0
-            idx = i0
-            if j == 1:
-                c = c1
-                idx = i1
-            elif j == 2:
-                c = c2
-                idx = i2
+            c = _corner_weights(D, j)
+            idx = faces[f, j]
             a = f0 * c[0]
             b = f1 * c[1]
             s = f0 * c[1] + f1 * c[0]
@@ -167,6 +158,9 @@ def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
             blk = blk + wp.identity(n=3, dtype=float) * geo
             wp.atomic_add(out_diag, idx, blk * A)
         return
+    c0 = _corner_weights(D, 0)
+    c1 = _corner_weights(D, 1)
+    c2 = _corner_weights(D, 2)
     p0 = p[i0]
     p1 = p[i1]
     p2 = p[i2]
@@ -182,14 +176,8 @@ def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
     g0 = df0 * S[0, 0] + df1 * S[1, 0]
     g1 = df0 * S[0, 1] + df1 * S[1, 1]
     for j in range(3):
-        c = c0
-        idx = i0
-        if j == 1:
-            c = c1
-            idx = i1
-        elif j == 2:
-            c = c2
-            idx = i2
+        c = _corner_weights(D, j)
+        idx = faces[f, j]
         val = f0 * (c[0] * ta + c[1] * ts) + f1 * (c[1] * tb + c[0] * ts) + g0 * c[0] + g1 * c[1]
         wp.atomic_add(out, idx, val * A)
 
