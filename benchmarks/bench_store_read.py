@@ -2,9 +2,10 @@
 
 Each access pattern goes through the same :class:`~datagen.store.DatasetStore` code, once reading
 the store (zarr-python and/or tensorstore backends) and once reading numpy arrays loaded into
-memory beforehand; the ratio is the price of the store. Patterns: whole random samples, random
-segments (paper 001's training unit), random single frames (paper 000's), and a sequential pass
-over the train split. Figures are samples (or segments, frames) per second and MB/s of decoded
+memory beforehand (derivation of the features included in both); the ratio is the price of the
+store. Patterns: whole random samples (stored arrays), random segments with what paper 001 reads,
+random single frames with every feature paper 000 needs (derived ones included), and a sequential
+pass over the train split. Figures are samples (or segments, frames) per second and MB/s of decoded
 array bytes. The store's files are usually in the OS page cache (a just-built store always is):
 this measures decoding and library overhead, not the disk.
 
@@ -33,6 +34,11 @@ from datagen.store.layout import directory_bytes  # noqa: E402
 from schemas.dataset import ARRAYS  # noqa: E402
 
 MB = 1e6
+PAPER_000_FRAME = ["detail", "coarse", "anchor", "anchor_normal", "anchor_skin", "coarse_normal", "skin",
+                   "joint_distance", "joints", "pose", "trans"]
+"""Everything paper 000's GNN reads of one frame: positions, targets and node features (derived included)."""
+PAPER_001_SEGMENT = ["pose", "trans", "label", "detail"]
+"""What paper 001's models read of one segment: the motion, its label and the garment's vertices."""
 
 
 class MemoryRows:
@@ -64,11 +70,15 @@ def synthetic_static(G: int, V: int, B: int, S: int = 10, D: int = 256, seed: in
     F_g = 2 * V_g - 40
     nv, nf = int(V_g.sum()), int(F_g.sum())
     parents = np.array([-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21], np.int32)
+    faces = rng.integers(0, B, (2 * B, 3)).astype(np.int32)
+    edges = np.unique(np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1), axis=0)
+    Bs = B + len(edges)
     return {
         "body": ({"v_template": rng.normal(size=(B, 3)).astype(f32),
                   "shapedirs": rng.normal(size=(B, 3, S)).astype(f32),
                   "J_regressor": (np.eye(J, B) + 0).astype(f32), "weights": w / w.sum(1, keepdims=True),
-                  "parents": parents, "faces": rng.integers(0, B, (2 * B, 3)).astype(np.int32)}, {}),
+                  "parents": parents, "faces": faces, "subdivision_edges": edges.astype(np.int32),
+                  "subdivided_faces": rng.integers(0, Bs, (8 * B, 3)).astype(np.int32)}, {}),
         "bodies": ({"betas": rng.normal(size=(G, S)).astype(f32)}, {"body_names": [f"body-{g}" for g in range(G)]}),
         "motions": ({"label": np.zeros(G, np.int32), "seed": np.arange(G, dtype=np.int32),
                      "frame_count": np.full(G, 60, np.int32)}, {"label_names": ["walk"]}),
@@ -78,7 +88,7 @@ def synthetic_static(G: int, V: int, B: int, S: int = 10, D: int = 256, seed: in
                       "faces": np.concatenate([rng.integers(0, v, (f, 3)) for v, f in zip(V_g, F_g, strict=True)]
                                               ).astype(np.int32),
                       "uv": rng.random((nv, 2)).astype(f32), "region": np.zeros(nv, np.int32),
-                      "seam": np.zeros(nv, np.uint8), "indicator": rng.integers(0, 4 * B, nv).astype(np.int32),
+                      "seam": np.zeros(nv, np.uint8), "indicator": rng.integers(0, Bs, nv).astype(np.int32),
                       "skin_weights": rng.random((nv, J)).astype(f32), "type": np.zeros(G, np.int32),
                       "seed": np.arange(G, dtype=np.int32), "body": np.arange(G, dtype=np.int32),
                       "material": np.zeros(G, np.int32), "alpha": rng.normal(size=(G, 3)).astype(f32),
@@ -99,15 +109,9 @@ def synthetic_sample(i: int, V: int, T: int, B: int, G: int, lead: int = 30) -> 
         walk = np.cumsum(rng.normal(scale=scale, size=(T, *shape_tail)), axis=0)
         return (base + walk).astype(f32)
 
-    def unit(shape):
-        n = rng.normal(size=shape)
-        return (n / np.linalg.norm(n, axis=-1, keepdims=True)).astype(f32)
-
-    arrays = {name: moving((V, 3)) for name in ("detail", "coarse", "anchor", "anchor_skin", "skin")}
-    arrays |= {"anchor_normal": unit((T, V, 3)), "coarse_normal": unit((T, V, 3)),
-               "joint_distance": np.abs(moving((V, J), 0.002)), "pose": moving((J, 3), 0.02),
-               "trans": moving((3,), 0.01), "joints": moving((J, 3)), "label": np.zeros(T, np.int32),
-               "body_vertices": moving((B, 3))}
+    arrays = {name: moving((V, 3)) for name in ("detail", "coarse")}
+    arrays |= {"pose": moving((J, 3), 0.02), "trans": moving((3,), 0.01), "joints": moving((J, 3)),
+               "label": np.zeros(T, np.int32)}
     T_sim = lead + T
     arrays |= {"metric_stretch_max": rng.random(T_sim).astype(f32),
                "metric_stretch_mean": rng.random(T_sim).astype(f32),
@@ -238,8 +242,8 @@ def run(args) -> None:
     for name in args.backends.split(","):
         readers[name] = open_store(args.store, backend=name.strip())
     patterns = [("sample (random)", "samples", lambda s, i: s.sample(i), samples),
-                ("segment (random)", "segments", lambda s, k: s.segment(k), segments),
-                ("frame (random)", "frames", lambda s, it: s.frames(it[0], it[1]), frames),
+                ("segment (001)", "segments", lambda s, k: s.segment(k, names=PAPER_001_SEGMENT), segments),
+                ("frame (000)", "frames", lambda s, it: s.frames(it[0], it[1], names=PAPER_000_FRAME), frames),
                 ("iter_split(train)", "samples", None, train)]
     names = [n for n in readers if n != "memory"]
     print(f"{'access':<19}{'backend':<13}{'items/s':>10}{'MB/s':>9}{'memory items/s':>16}{'memory MB/s':>13}"

@@ -1,4 +1,4 @@
-"""Schema of drape's dataset store (version 3): every group and array of the packed zarr v3 store
+"""Schema of drape's dataset store (version 4): every group and array of the packed zarr v3 store
 with its symbolic shape, dtype, unit and meaning, the table whose rows its first axis runs over,
 and every required root attribute. ``datagen.store`` writes, reads and validates against this
 module and nothing else; ``docs/store.md`` explains it in prose.
@@ -23,7 +23,24 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-DATASET_SCHEMA_VERSION = 3
+DATASET_SCHEMA_VERSION = 4
+"""4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored (they come from
+:mod:`datagen.geometry.features`), the subdivided body's topology stored, the fit attribute optional.
+3: the code version recorded. 2: the slip metric."""
+
+REFUSED_VERSIONS: dict[int, str] = {
+    3: "version 3 stored the derived arrays (body vertices, anchors, normals, skinning features, joint distances) "
+       "that version 4 derives on read, and positions as float32",
+    2: "version 2 had no code version",
+    1: "version 1 had no slip metric",
+}
+"""Why each older schema version is refused (a store is made again; it is a pure function of its config)."""
+
+POSITION_QUANTUM = 5.0e-5
+"""Step (m) of the stored garment positions: ``detail`` and ``coarse`` are int32 multiples of it,
+relative to the frame's root joint (``frames/joints[:, 0]``). Rounding to the nearest step bounds
+the error at half a step, 0.025 mm, plus float32 rounding of the decoded sum (< 1e-7 m within 2 m
+of the root); int32 spans +-107 km, so no position is out of range."""
 
 STORE_FORMAT = "drape-dataset"
 """Value of the root attribute ``format`` that marks a zarr group as a drape dataset store."""
@@ -96,8 +113,13 @@ class ArraySpec:
             ``len(names) - 1``).
         index_of: dimension symbol whose size bounds the values (valid ``minimum`` to size - 1).
         minimum: smallest valid value of a code or index array (-1: "none"/"unlabelled").
-        finite: float arrays: ``"all"`` (every value finite) or ``"ok_samples"`` (finite in samples
-            with ``failure == 0``; a failed sample may hold inf/nan from the step that failed).
+        finite: float arrays: ``"all"`` (every value finite), ``"ok_samples"`` (finite in samples
+            with ``failure == 0``; a failed sample may hold inf/nan from the step that failed) or
+            ``"fitted"`` (finite when the root attribute ``fit_attribute`` is true, NaN otherwise).
+        quantum: positions stored as integers: the value in ``unit`` is ``stored * quantum +`` the
+            frame's root joint (``frames/joints[:, 0]``); the writer takes and the reader returns
+            float32 metres.
+        compression: the chunk compressor, as :data:`COMPRESSION` (``None``: :data:`COMPRESSION`).
     """
 
     path: str
@@ -112,6 +134,8 @@ class ArraySpec:
     index_of: str | None = None
     minimum: int | None = None
     finite: str = "all"
+    quantum: float | None = None
+    compression: dict | None = None
 
     @property
     def group(self) -> str:
@@ -150,7 +174,9 @@ DIMENSIONS: dict[str, str] = {
     "G": "garment instances",
     "n_garment_vertices": "garment-instance vertices over all instances (sum of V)",
     "n_garment_faces": "garment-instance triangles over all instances (sum of F)",
-    "D": "features of the fit-attribute factor-analysis model",
+    "D": "features of the fit-attribute factor-analysis model (0 when the store has no fit attribute)",
+    "E": "edges of the body mesh: midpoint vertices of the subdivided body (vertex B + e on edge e)",
+    "Fs": "triangles of the subdivided body (4 Fb)",
 }
 """Dimension symbols used in shapes, with their meaning."""
 
@@ -160,6 +186,11 @@ COMPRESSION: dict[str, str | int] = {"codec": "blosc", "cname": "lz4", "clevel":
 """Compressor of every chunk (inside the sharding codec): blosc's lz4 over bit-shuffled values. On
 float32 cloth data it decodes ~1.4x faster than blosc-zstd and ~1.6x faster than plain zstd at an
 equal or better ratio (benchmarks in docs/store.md); reads, not bytes, limit training."""
+
+POSITION_COMPRESSION: dict[str, str | int] = {"codec": "blosc", "cname": "zstd", "clevel": 5, "shuffle": "bitshuffle"}
+"""Compressor of the quantised positions: int32 steps of 0.05 mm from the root joint are small
+numbers whose high bits are all equal, which bit-shuffle + zstd packs to ~5.5 B per vertex (lz4:
+~6.5 B; float32 with lz4: ~10 B; measured on tiny's garments, docs/store.md)."""
 
 _ROWS = Chunking(chunk_bytes=256 * 1024, shard_bytes=64 * 1024 * 1024)
 _SMALL = Chunking(chunk_bytes=1024 * 1024, shard_bytes=64 * 1024 * 1024)
@@ -186,7 +217,8 @@ TABLES: dict[str, Table] = {
 
 def _vertex(name: str, k: int | str, unit: str, doc: str) -> ArraySpec:
     return ArraySpec(path=f"vertex_frames/{name}", shape=("n_vertex_rows", k), sample_shape=("T", "V", k),
-                     dtype="float32", unit=unit, doc=doc, table="vertex_frame", written_by="stage_sample")
+                     dtype="int32", unit=unit, doc=doc, table="vertex_frame", written_by="stage_sample",
+                     quantum=POSITION_QUANTUM, compression=POSITION_COMPRESSION)
 
 
 def _frame(name: str, tail: tuple, dtype: str, unit: str, doc: str, **kw) -> ArraySpec:
@@ -216,20 +248,14 @@ def _offset(path: str, shape: tuple, doc: str, dtype: str = "int64", unit: str =
 
 _ARRAY_LIST: tuple[ArraySpec, ...] = (
     # --- per vertex and recorded frame: [T, V, k] per sample, packed [n_vertex_rows, k]
-    _vertex("detail", 3, "m", "simulated garment vertex positions"),
-    _vertex("coarse", 3, "m", "smoothed (coarse) garment vertex positions"),
-    _vertex("anchor", 3, "m", "position of the posed body vertex each garment vertex is attached to"),
-    _vertex("anchor_normal", 3, "1", "unit normal of the posed body at the anchor vertex"),
-    _vertex("anchor_skin", 3, "m", "relative skinning feature of the anchor body vertex"),
-    _vertex("coarse_normal", 3, "1", "unit vertex normal of the coarse garment"),
-    _vertex("skin", 3, "m", "relative skinning feature of the garment vertex"),
-    _vertex("joint_distance", "J", "m", "distance from the garment vertex to each joint"),
+    _vertex("detail", 3, "m", "simulated garment vertex positions (stored: int32 steps of quantum from the frame's "
+            "root joint)"),
+    _vertex("coarse", 3, "m", "smoothed (coarse) garment vertex positions, paper 000 eq. 9 (stored as detail)"),
     # --- per recorded frame: [T, ...] per sample, packed [n_frames, ...]
     _frame("pose", ("J", 3), "float32", "rad", "joint rotations, axis-angle, root first"),
     _frame("trans", (3,), "float32", "m", "root translation"),
     _frame("joints", ("J", 3), "float32", "m", "posed joint positions"),
     _frame("label", (), "int32", "code", "motion label of the frame", codes="label_names", minimum=-1),
-    _frame("body_vertices", ("B", 3), "float32", "m", "posed body vertices"),
     # --- per simulated frame: [T_sim] per sample, packed [n_sim_frames]
     _metric("metric_stretch_max", "float32", "1", "largest principal stretch minus one over the garment's triangles"),
     _metric("metric_stretch_mean", "float32", "1", "area-weighted mean principal stretch minus one"),
@@ -267,6 +293,11 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
     _static("body/parents", ("J",), "int32", "index", "parent joint of each joint, -1 for the root", index_of="J",
             minimum=-1),
     _static("body/faces", ("Fb", 3), "int32", "index", "body triangles", index_of="B"),
+    _static("body/subdivision_edges", ("E", 2), "int32", "index",
+            "the subdivided body (paper 000 §5.1): vertex B + e is the midpoint of edge e's two vertices, in "
+            "every quantity linear in the vertices (template, shape directions, skinning weights)", index_of="B"),
+    _static("body/subdivided_faces", ("Fs", 3), "int32", "index",
+            "triangles of the subdivided body, indices into its B + E vertices"),
     # --- bodies, motions
     _static("bodies/betas", ("n_bodies", "S"), "float32", "1", "shape coefficients of each body"),
     _static("motions/label", ("M",), "int32", "code", "label of each motion", codes="label_names", minimum=-1),
@@ -288,7 +319,8 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
     _static("garments/seam", ("n_garment_vertices",), "uint8", "bool", "1 on a seam between two panels",
             table="garment_vertex"),
     _static("garments/indicator", ("n_garment_vertices",), "int32", "index",
-            "vertex of the subdivided body each garment vertex is attached to", minimum=0, table="garment_vertex"),
+            "vertex of the subdivided body each garment vertex is attached to (0 .. B + E - 1)", minimum=0,
+            table="garment_vertex"),
     _static("garments/skin_weights", ("n_garment_vertices", "J"), "float32", "1", "skinning weights of the vertex",
             table="garment_vertex"),
     _static("garments/type", ("G",), "int32", "code", "garment type", codes="garment_type_names", table="garment"),
@@ -296,8 +328,9 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
     _static("garments/body", ("G",), "int32", "index", "body the instance was made for", index_of="n_bodies",
             table="garment"),
     _static("garments/material", ("G",), "int32", "code", "material", codes="material_names", table="garment"),
-    _static("garments/alpha", ("G", 3), "float32", "1", "fit attribute (factor scores under the fit/ model)",
-            table="garment"),
+    _static("garments/alpha", ("G", 3), "float32", "1", "fit attribute (factor scores under the fit/ model); NaN "
+            "when the store has no fit attribute (root attribute fit_attribute false)", table="garment",
+            finite="fitted"),
     _static("garments/rest_area", ("G",), "float32", "m²", "total rest area of the instance", table="garment"),
     # --- the fit-attribute model (factor analysis, paper 000)
     _static("fit/components", (3, "D"), "float32", "m", "factor loadings (in the features' unit)"),
@@ -307,6 +340,20 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
             "(rule version, N_g*, seed) of the even subsampling that picks the D features (datagen.targets.fit)",
             minimum=0),
 )
+
+DERIVED: dict[str, tuple[str, ...]] = {
+    "joints": ("pose", "trans"),
+    "anchor": ("pose", "trans"),
+    "anchor_normal": ("pose",),
+    "anchor_skin": ("pose",),
+    "skin": ("pose",),
+    "coarse_normal": ("coarse",),
+    "joint_distance": ("coarse", "joints"),
+    "body_vertices": ("pose", "trans"),
+}
+"""Per-frame arrays that are functions of the stored ones and the static groups (not stored; the
+reader derives them with :mod:`datagen.geometry.features`), each with the stored per-frame arrays
+it is computed from. ``joints`` is stored as well (it is the origin of the quantised positions)."""
 
 ARRAYS: dict[str, ArraySpec] = {a.path: a for a in _ARRAY_LIST}
 """Every array of the packed store, by path."""
@@ -347,6 +394,11 @@ ROOT_ATTRIBUTES: dict[str, AttributeSpec] = {
     "segment_length": AttributeSpec(type="int", doc="frames per segment in index/segments"),
     "complete": AttributeSpec(type="bool", doc="true once pack() has finished; set last, atomically"),
     "units": AttributeSpec(type="dict", doc="array path -> unit (as each array's 'unit' attribute)"),
+    "fit_attribute": AttributeSpec(type="bool", doc="whether the fit attribute α was fitted (the config's "
+                                                   "fit_attribute); false: garments/alpha is NaN and fit/ has D = 0"),
+    "fit_diagnostics": AttributeSpec(type="dict", doc="the factor analysis's health: training pairs, factors, "
+                                                     "features at the noise-variance floor, α's spread across "
+                                                     "subsample seeds, and the warnings given ({} without a fit)"),
     **NAME_LISTS,
 }
 """Required root attributes of a packed store."""

@@ -23,6 +23,9 @@ import numpy as np
 import torch
 
 from datagen.geometry.rotations import axis_angle_to_matrix, axis_angle_to_matrix_np
+from datagen.geometry.skinning import blend_skinning, rigid_transforms, rigid_transforms_np
+
+__all__ = ["blend_skinning", "lbs", "lbs_np", "rigid_transforms", "rigid_transforms_np"]
 
 
 # ----------------------------------------------------------------------------- numpy
@@ -78,42 +81,8 @@ def lbs_np(
     return verts, posed_joints
 
 
-def rigid_transforms_np(rot: np.ndarray, joints: np.ndarray, parents) -> tuple[np.ndarray, np.ndarray]:
-    """Forward kinematics. rot [B, J, 3, 3] local rotations, joints [B, J, 3] rest positions.
-
-    Returns posed joint positions [B, J, 3] and the skinning transforms [B, J, 4, 4] that take a
-    rest-pose point to its posed position (G_j with the rest joint position removed).
-    """
-    batch, J = rot.shape[:2]
-    dtype = rot.dtype
-    rel_joints = joints.copy()
-    rel_joints[:, 1:] -= joints[:, np.asarray(parents[1:])]
-    local = np.zeros((batch, J, 4, 4), dtype=dtype)
-    local[:, :, :3, :3] = rot
-    local[:, :, :3, 3] = rel_joints
-    local[:, :, 3, 3] = 1.0
-    world = np.empty_like(local)
-    world[:, 0] = local[:, 0]
-    for j in range(1, J):
-        world[:, j] = world[:, parents[j]] @ local[:, j]
-    posed_joints = world[:, :, :3, 3].copy()
-    rel = world.copy()
-    rel[:, :, :3, 3] -= np.einsum("bjik,bjk->bji", world[:, :, :3, :3], joints)
-    return posed_joints, rel
 
 
-def blend_skinning(vertices, weights, transforms):
-    """Linear blend skinning of points [B, V, 3] with weights [V, J] and per-joint transforms
-    [B, J, 4, 4] (numpy or torch): ``v' = Σ_j w_vj T_j v``.
-
-    The [3, 4] transforms are blended by one matmul, then applied as four scaled column sums: a
-    batched 3x3 matmul per vertex is several times slower.
-    """
-    batch, J = transforms.shape[:2]
-    blended = (weights @ transforms[:, :, :3, :].reshape(batch, J, 12)).reshape(batch, -1, 3, 4)
-    v = vertices
-    return (blended[..., 0] * v[..., 0:1] + blended[..., 1] * v[..., 1:2]
-            + blended[..., 2] * v[..., 2:3] + blended[..., 3])
 
 
 def _regress_np(J_regressor, vertices: np.ndarray) -> np.ndarray:
@@ -160,20 +129,3 @@ def lbs(
         posed_joints = posed_joints + transl
     return verts, posed_joints
 
-
-def rigid_transforms(rot: torch.Tensor, joints: torch.Tensor, parents: list[int]) -> tuple[torch.Tensor, torch.Tensor]:
-    """Torch version of :func:`rigid_transforms_np` (no in-place writes, so autograd works)."""
-    rel_joints = torch.cat([joints[:, :1], joints[:, 1:] - joints[:, parents[1:]]], dim=1)
-    top = torch.cat([rot, rel_joints.unsqueeze(-1)], dim=-1)  # [B, J, 3, 4]
-    bottom = torch.zeros_like(top[..., :1, :])
-    bottom[..., 0, 3] = 1.0
-    local = torch.cat([top, bottom], dim=-2)
-    chain = [local[:, 0]]
-    for j in range(1, len(parents)):
-        chain.append(chain[parents[j]] @ local[:, j])
-    world = torch.stack(chain, dim=1)
-    posed_joints = world[:, :, :3, 3]
-    offset = torch.einsum("bjik,bjk->bji", world[:, :, :3, :3], joints)
-    rel = torch.cat([world[:, :, :3, :3], (world[:, :, :3, 3] - offset).unsqueeze(-1)], dim=-1)
-    rel = torch.cat([rel, world[:, :, 3:, :]], dim=-2)
-    return posed_joints, rel

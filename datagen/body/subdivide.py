@@ -59,6 +59,17 @@ def subdivide_body(model: "BodyModel") -> "BodyModel":
     )
 
 
+def subdivision_edges(faces: np.ndarray) -> np.ndarray:
+    """The edges [E, 2] (int32) whose midpoints :func:`subdivide_body` appends, in its order: vertex
+    ``V + e`` of the subdivided model is the midpoint of edge ``e`` (trimesh's unique sorted edges)."""
+    from trimesh import grouping
+    from trimesh.geometry import faces_to_edges
+
+    edges = np.sort(faces_to_edges(np.asarray(faces, dtype=np.int64)), axis=1)
+    unique, _ = grouping.unique_rows(edges)
+    return edges[unique].astype(np.int32)
+
+
 def unique_edge_count(faces: np.ndarray) -> int:
     """Number of distinct undirected edges of a triangle mesh."""
     e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)

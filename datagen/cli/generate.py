@@ -20,7 +20,9 @@ def register(sub, formatter) -> None:
     p.add_argument("--preset", default=None, help="tiny (default), small, paper-gnn, paper-motion")
     p.add_argument("--out", required=True, help="the store directory")
     p.add_argument("--executor", default="local", choices=("local", "ray"))
-    p.add_argument("--workers", type=int, default=2, help="Ray workers on a local Ray instance")
+    p.add_argument("--workers", type=int, default=None,
+                   help="local: processes that build garments, compute targets and stage while the simulator runs "
+                        "(default: cores - 1, at most 8; 0: none); ray: Ray workers (default 2)")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N)")
     p.add_argument("--print-config", action="store_true", help="print the resolved config and stop")
     p.set_defaults(func=_cmd_generate)
@@ -80,6 +82,11 @@ def _cmd_generate(args) -> int:
     elif summary["seconds"] > 0:
         print(f"simulated {summary['simulated']} scenes in {summary['seconds']:.0f} s; {frames} garment-frames stored, "
               f"{frames / summary['seconds']:.2f} garment-frames/s end to end")
+        if summary.get("simulate_seconds"):
+            print(f"the simulator alone: {summary['simulator_garment_frames_per_second']:.2f} garment-frames/s "
+                  f"({summary['simulate_seconds']:.0f} s in {summary['batches']} batch(es)); end to end is "
+                  f"{summary['garment_frames_per_second'] / summary['simulator_garment_frames_per_second']:.2f}x "
+                  f"that; the simulating process waited {summary['wait_seconds']:.1f} s for the workers")
     problems = validate(args.out)
     if problems:
         print("validate found problems:\n  " + "\n  ".join(problems), file=sys.stderr)

@@ -33,6 +33,8 @@ from datagen.errors import ConfigError
 from datagen.sim.scene import RunConfig
 
 BODY_PRESETS = ("thin", "regular", "fat")
+FIT_FACTORS = 3
+"""Factors of the fit attribute α (paper 000: 3)."""
 DISJOINT_KINDS = ("garments", "bodies", "motions")
 
 
@@ -80,6 +82,8 @@ class DatasetConfig:
         frames: recorded frames per sample.
         segment_length: frames per segment for paper 001's sequence models.
         garment_edge_length: target edge length of the garments [m] (None: each type's default).
+        fit_attribute: fit paper 000's fit attribute α (a factor analysis over the training split's
+            garment-body pairs, which needs more than 3 of them); paper 001's models never use it.
         split_disjoint: what the splits must not share.
         simulation: simulator settings.
         train, val, test: the splits.
@@ -90,6 +94,7 @@ class DatasetConfig:
     frames: int = field(default=60, metadata={"min": 1, "max": 100000})
     segment_length: int = field(default=60, metadata={"min": 1, "max": 100000})
     garment_edge_length: float | None = field(default=None, metadata={"min": 0.004, "max": 0.2})
+    fit_attribute: bool = True
     split_disjoint: tuple[str, ...] = DISJOINT_KINDS
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
     train: SplitConfig = field(default_factory=SplitConfig)
@@ -168,6 +173,12 @@ def check_dataset_config(c: DatasetConfig) -> None:
                     raise ConfigError(f"{item!r} is in both {other}.{kind} and {split}.{kind}; splits must not share "
                                       f"{kind} (or drop '{kind}' from split_disjoint)")
                 seen[kind].setdefault(item, split)
+    if c.fit_attribute:
+        pairs = len({(g, b) for g in c.train.garments for b in c.train.bodies})
+        if pairs <= FIT_FACTORS:
+            raise ConfigError(f"the fit attribute (a factor analysis with {FIT_FACTORS} factors) needs more than "
+                              f"{FIT_FACTORS} garment-body pairs in the train split, which has {pairs}; add garments "
+                              "or bodies to it, or set fit_attribute = false (paper 001's models do not use α)")
 
 
 PRESETS: dict[str, dict] = {
@@ -219,7 +230,7 @@ PRESETS: dict[str, dict] = {
     # paper 001 §4.1: one template per garment type (skirt, T-shirt, pants) on the mean body, motions
     # of every label cut into T = 60 segments; split by motion only
     "paper-motion": {
-        "seed": 0, "frames": 240, "segment_length": 60, "split_disjoint": ["motions"],
+        "seed": 0, "frames": 240, "segment_length": 60, "split_disjoint": ["motions"], "fit_attribute": False,
         "simulation": {"batch_size": 64},
         "train": {"garments": ["skirt:0", "tshirt:0", "pants:0"], "bodies": ["regular"],
                   "motions": [f"{m}:{s}" for s in range(4) for m in (

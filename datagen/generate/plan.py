@@ -32,6 +32,7 @@ class Plan:
         self.config = config
         self._garments: dict[int, object] = {}  # instance -> GarmentMesh, built on first use
         self._correspondences: dict[int, dict] = {}  # instance -> garment_correspondence(...)
+        self.fit_diagnostics: dict | None = None  # set by static_groups()
         self.bodies: list[str] = []
         self.motions: list[str] = []
         self.instances: list[tuple[str, str]] = []  # (garment "type:seed", body name)
@@ -85,6 +86,10 @@ class Plan:
         """How every scene is run: the config's simulation settings (a :class:`RunConfig`)."""
         return self.config.simulation
 
+    def has_garment(self, g: int) -> bool:
+        """Whether garment instance g is built in this process already."""
+        return g in self._garments
+
     def garment(self, g: int):
         """Garment instance g (built once per process)."""
         cache = self._garments
@@ -111,11 +116,12 @@ class Plan:
 
 
 def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
-    """group -> (arrays, names) for every static group of the store."""
-    from datagen.materials import MATERIALS
+    """group -> (arrays, names) for every static group of the store (the fit group's diagnostics are
+    :meth:`Plan.fit_diagnostics` once this has run)."""
+    from datagen.body.subdivide import subdivision_edges
     from datagen.garment.registry import garment_type, garment_type_names
+    from datagen.materials import MATERIALS
     from datagen.motion.labels import LABELS
-    from datagen.targets import fit_attribute, fit_attribute_model, fit_pair
 
     m = plan.body_model
     f32 = np.float32
@@ -125,6 +131,14 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
             "weights": m.weights.astype(f32), "parents": np.asarray(m.parents, dtype=np.int32),
             "faces": m.faces.astype(np.int32)}
     body["parents"][0] = -1
+    edges = subdivision_edges(m.faces)
+    fine = plan.subdivided
+    B = m.vertex_count
+    if len(fine.v_template) != B + len(edges) or not np.allclose(
+            fine.v_template[B:], 0.5 * (m.v_template[edges[:, 0]] + m.v_template[edges[:, 1]]), rtol=0, atol=1e-12):
+        raise RuntimeError("the subdivided body's midpoints are not in subdivision_edges order (trimesh changed?)")
+    body["subdivision_edges"] = edges
+    body["subdivided_faces"] = fine.faces.astype(np.int32)
     motions = [plan.motion(i) for i in range(len(plan.motions))]
     motion_arrays = {"label": np.array([LABELS.index(parse_motion(s)[0]) for s in plan.motions], np.int32),
                      "seed": np.array([parse_motion(s)[1] for s in plan.motions], np.int32),
@@ -132,15 +146,7 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
     garments = [plan.garment(g) for g in range(len(plan.instances))]
     regions = sorted({r for g in garments for r in g.region_names})
     materials = list(MATERIALS)
-    pairs = []
-    for g in range(len(garments)):
-        b = plan.bodies.index(plan.instances[g][1])
-        pairs.append(fit_pair(garments[g].vertices, garments[g].faces, plan.subdivided, plan.betas[b],
-                              indicator=plan.correspondence(g)["indicator"]))
-    train = sorted({s.garment for s in plan.scenes if s.split == "train"})
-    fit = fit_attribute_model([pairs[g] for g in train], subsample_count=min(len(g.vertices) for g in garments),
-                              subsample_seed=plan.config.seed, random_state=plan.config.seed)
-    alpha = np.stack([fit_attribute(fit, p) for p in pairs]).astype(f32)
+    alpha, fa, plan.fit_diagnostics = _fit(plan, garments)
     vs = np.concatenate([[0], np.cumsum([len(g.vertices) for g in garments])]).astype(np.int64)
     fs = np.concatenate([[0], np.cumsum([len(g.faces) for g in garments])]).astype(np.int64)
     garment_arrays = {
@@ -163,7 +169,6 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
         "rest_area": np.array([_area(g.vertices, g.faces) if g.metadata.rest_area_m2 is None else g.metadata.rest_area_m2
                                for g in garments], f32),
     }
-    fa = fit.as_arrays()
     return {
         "body": (body, None),
         "bodies": ({"betas": plan.betas.astype(f32)}, {"body_names": list(plan.bodies)}),
@@ -173,6 +178,34 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
         "fit": ({"components": fa["components"].astype(f32), "mean": fa["mean"].astype(f32),
                  "noise_variance": fa["noise_variance"].astype(f32), "subsample": fa["subsample"]}, None),
     }
+
+
+def _fit(plan: Plan, garments: list) -> tuple[np.ndarray, dict, dict]:
+    """(α [G, 3] float32, the fit group's arrays, diagnostics): a factor analysis over the training
+    split's garment-body pairs, or NaN α, D = 0 arrays and {} when the config has no fit attribute."""
+    import logging
+
+    from datagen.generate.config import FIT_FACTORS
+    from datagen.targets import fit_attribute, fit_attribute_model, fit_diagnostics, fit_pair
+
+    G = len(garments)
+    if not plan.config.fit_attribute:
+        none = {"components": np.zeros((FIT_FACTORS, 0)), "mean": np.zeros(0), "noise_variance": np.zeros(0),
+                "subsample": np.zeros(3, np.int64)}
+        return np.full((G, FIT_FACTORS), np.nan, np.float32), none, {}
+    pairs = []
+    for g in range(G):
+        b = plan.bodies.index(plan.instances[g][1])
+        pairs.append(fit_pair(garments[g].vertices, garments[g].faces, plan.subdivided, plan.betas[b],
+                              indicator=plan.correspondence(g)["indicator"]))
+    train = [pairs[g] for g in sorted({s.garment for s in plan.scenes if s.split == "train"})]
+    fit = fit_attribute_model(train, factor_count=FIT_FACTORS, subsample_count=min(len(g.vertices) for g in garments),
+                              subsample_seed=plan.config.seed, random_state=plan.config.seed)
+    alpha = np.stack([fit_attribute(fit, p) for p in pairs]).astype(np.float32)
+    diagnostics = fit_diagnostics(train, pairs, fit, random_state=plan.config.seed)
+    for w in diagnostics["warnings"]:
+        logging.getLogger(__name__).warning("fit attribute: %s", w)
+    return alpha, fit.as_arrays(), diagnostics
 
 
 def _area(v: np.ndarray, f: np.ndarray) -> float:

@@ -7,9 +7,10 @@
    meshes, labels, the indicator into the subdivided body, skinning weights) and the
    fit-attribute model, a factor analysis fitted on the training split's garment-body pairs only
    and applied to every instance (α).
-3. Samples: scenes are simulated in batches (same frame count); each result becomes the targets
-   of :mod:`datagen.targets` and is staged atomically. Failed scenes are staged with their reason
-   and metrics and no frames.
+3. Samples: scenes are simulated in batches (same frame count); each result becomes what the
+   store keeps (:func:`~datagen.generate.samples.sample_arrays`) and is staged atomically, by
+   worker processes while the next batch simulates (:mod:`datagen.generate.samples`). Failed
+   scenes are staged with their reason and metrics and no frames.
 4. Pack (one process).
 
 Everything is a pure function of the config: the staged samples of a killed run are kept and
@@ -25,7 +26,7 @@ from pathlib import Path
 from datagen.errors import InputError
 from datagen.generate.config import DatasetConfig
 from datagen.generate.plan import Plan, open_writer, static_groups
-from datagen.generate.samples import simulate_samples
+from datagen.generate.samples import default_workers, simulate_samples
 
 log = logging.getLogger(__name__)
 
@@ -33,8 +34,21 @@ __all__ = ["generate"]
 
 
 def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local", device: str | None = None,
-             workers: int = 2, progress=None) -> dict:
-    """Make (or finish) the store ``out`` for ``config``; returns a summary dict."""
+             workers: int | None = None, progress=None) -> dict:
+    """Make (or finish) the store ``out`` for ``config``; returns a summary dict.
+
+    Args:
+        executor: ``local`` (this process simulates; ``workers`` processes build garments, compute
+            targets and stage alongside) or ``ray`` (``workers`` Ray tasks each simulate a share).
+        workers: processes beside the simulating one (default
+            :func:`~datagen.generate.samples.default_workers`; 0: everything in this process).
+
+    Returns:
+        ``samples``, ``simulated``, ``seconds`` (wall time), ``complete``, and for the local
+        executor ``simulate_seconds`` (inside the simulator), ``garment_frames`` (recorded frames
+        of the samples that did not fail) and the rates ``garment_frames_per_second`` (end to end)
+        and ``simulator_garment_frames_per_second``.
+    """
     plan = Plan(config)
     writer = open_writer(plan, out)
     if writer.is_complete:
@@ -42,15 +56,22 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
     t0 = time.perf_counter()
     if writer.missing_static():
         for group, (arrays, names) in static_groups(plan).items():
-            writer.stage_static(group, arrays, names=names)
+            writer.stage_static(group, arrays, names=names,
+                                **({"diagnostics": plan.fit_diagnostics} if group == "fit" else {}))
     todo = writer.missing(range(plan.sample_count))
     log.info("%d of %d samples to simulate", len(todo), plan.sample_count)
+    stats = {}
     if executor == "local":
-        simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s), progress=progress)
+        workers = default_workers() if workers is None else workers
+        if workers > 0 and todo:
+            stats = simulate_samples(plan, todo, device, progress=progress, out=out, workers=workers)
+        else:
+            stats = simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s),
+                                     progress=progress)
     elif executor == "ray":
         from datagen.generate.ray_executor import run_ray
 
-        run_ray(config, out, todo, device=device, workers=workers, progress=progress)
+        run_ray(config, out, todo, device=device, workers=2 if workers is None else workers, progress=progress)
     else:
         raise InputError(f"unknown executor {executor!r}; use local or ray")
     missing = writer.missing(range(plan.sample_count))
@@ -58,5 +79,10 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
         raise InputError(f"{len(missing)} samples were not staged (first {missing[:5]}); run the command again to "
                          "resume")
     writer.pack()
-    return {"samples": plan.sample_count, "simulated": len(todo), "seconds": time.perf_counter() - t0,
-            "complete": True}
+    seconds = time.perf_counter() - t0
+    summary = {"samples": plan.sample_count, "simulated": len(todo), "seconds": seconds, "complete": True}
+    if stats.get("simulate_seconds"):
+        summary |= stats
+        summary["garment_frames_per_second"] = stats["garment_frames"] / seconds
+        summary["simulator_garment_frames_per_second"] = stats["garment_frames"] / stats["simulate_seconds"]
+    return summary

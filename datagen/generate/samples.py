@@ -1,18 +1,35 @@
-"""The samples of a plan: scenes simulated in batches, each result turned into the targets of
-:mod:`datagen.targets` and handed to a callback (which stages it)."""
+"""The samples of a plan: scenes simulated in batches, each result turned into what the store keeps
+(:func:`sample_arrays`) and staged.
+
+Two ways to run (:func:`simulate_samples`):
+
+- **Overlapped** (``drape generate``'s local executor): a pool of worker processes computes the
+  targets of batch k and stages them into the store while batch k + 1 simulates, and builds the
+  garments of batch k + 1 (into the garment cache) while batch k simulates. The simulating process
+  only loads garments, runs the simulator and hands results over.
+- **In process** (``on_sample``): each result goes to a callback after its batch (the Ray
+  executor's tasks, tests).
+
+Both give the same store: a sample is a pure function of its scene.
+"""
 
 from __future__ import annotations
 
+import logging
+import multiprocessing
+import os
 import time
 from collections.abc import Callable, Sequence
+from concurrent.futures import Future, ProcessPoolExecutor
+from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
 from datagen.errors import InputError
-from datagen.generate.plan import SPLIT_CODES, Plan
+from datagen.generate.plan import SPLIT_CODES, Plan, ScenePlan
 
-
-# --------------------------------------------------------------------------------------- samples
+log = logging.getLogger(__name__)
 
 
 def failure_code(failure) -> int:
@@ -26,42 +43,164 @@ def failure_code(failure) -> int:
     return FAILURE_NAMES.index(failure.code)
 
 
-def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
-                     on_sample: Callable[[int, dict, dict], None], progress=None) -> None:
-    """Simulate the scenes ``indices`` in batches; hand each sample's (arrays, scalars) to ``on_sample``."""
-    from datagen.sim.scene import Scene, simulate
-    from datagen.targets import sample_targets
+@dataclass(frozen=True)
+class Outcome:
+    """What a sample needs of its scene's :class:`~datagen.sim.scene.SceneResult` (small enough to
+    send to a worker: no body frames)."""
 
+    positions: np.ndarray
+    poses: np.ndarray
+    trans: np.ndarray
+    metrics: dict
+    recorded_from: int
+    failure_code: int
+    failure_frame: int
+    label: int
+    seconds: float
+
+    @classmethod
+    def of(cls, result, label: int, seconds: float) -> Outcome:
+        return cls(positions=result.positions, poses=result.poses, trans=result.trans, metrics=result.metrics,
+                   recorded_from=result.recorded_from, failure_code=failure_code(result.failure),
+                   failure_frame=result.failure_frame, label=int(label), seconds=seconds)
+
+
+def sample_arrays(plan: Plan, s: ScenePlan, o: Outcome) -> tuple[dict, dict]:
+    """(arrays, scalars) of one sample, as ``StoreWriter.stage_sample`` takes them: the simulated
+    positions, the coarse target and the joints (every other target is derived on read), the
+    motion's pose, translation and label, and the metrics; a failed scene keeps its metrics only."""
+    from datagen.targets import stored_targets
+
+    arrays = {f"metric_{k}": np.asarray(v) for k, v in o.metrics.items()}
+    arrays["metric_nan"] = arrays["metric_nan"].astype(np.uint8)
+    if o.failure_code == 0:
+        garment = plan.garment(s.garment)
+        # the body model's joints equal the subdivided body's (its regressor ignores the midpoints)
+        arrays.update(stored_targets(garment.faces, plan.body_model, plan.betas[s.body], o.poses, o.trans,
+                                     o.positions))
+        arrays.update(detail=o.positions.astype(np.float32), pose=o.poses.astype(np.float32),
+                      trans=o.trans.astype(np.float32), label=np.full(len(o.positions), o.label, np.int32))
+    scalars = {"garment": s.garment, "body": s.body, "motion": s.motion, "split": SPLIT_CODES[s.split],
+               "failure": o.failure_code, "failure_frame": o.failure_frame, "recorded_from": o.recorded_from,
+               "seconds": o.seconds}
+    return arrays, scalars
+
+
+# ------------------------------------------------------------------------------- worker processes
+
+_WORKER: dict = {}
+
+
+def _init_worker(config, out: str) -> None:
+    from datagen.generate.plan import open_writer
+
+    # one BLAS thread per worker: the workers themselves are the parallelism
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    plan = Plan(config)
+    _WORKER.update(plan=plan, writer=open_writer(plan, out))
+
+
+def _build_garments(garments: Sequence[int]) -> int:
+    plan = _WORKER["plan"]
+    for g in garments:
+        plan.garment(g)  # built into the garment cache, where the simulating process finds it
+    return len(garments)
+
+
+def _finish(s: ScenePlan, o: Outcome) -> int:
+    arrays, scalars = sample_arrays(_WORKER["plan"], s, o)
+    _WORKER["writer"].stage_sample(s.index, arrays, scalars)
+    return s.index
+
+
+def default_workers() -> int:
+    """Worker processes for the overlapped pipeline: the cores beside the simulating one, at most 8."""
+    return max(1, min(8, (os.cpu_count() or 2) - 1))
+
+
+# ------------------------------------------------------------------------------------ the loop
+
+
+def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
+                     on_sample: Callable[[int, dict, dict], None] | None = None, progress=None, *,
+                     out: str | Path | None = None, workers: int = 0) -> dict:
+    """Simulate the scenes ``indices`` in batches of ``simulation.batch_size`` and stage their samples.
+
+    Args:
+        plan: the dataset's plan.
+        indices: scene indices to simulate.
+        device: warp device (``None``: warp's default).
+        on_sample: in-process mode: called with (index, arrays, scalars) of every sample.
+        progress: called as ``progress(done_batches, done_frames, total_frames, scenes)`` by the simulator.
+        out: overlapped mode: the store the workers stage into (with ``workers > 0``).
+        workers: worker processes of the overlapped mode.
+
+    Returns:
+        timings: ``simulate_seconds`` (inside the simulator), ``garment_frames`` (recorded, ok
+        samples), ``wait_seconds`` (the simulating process waiting for workers).
+    """
+    from datagen.sim.scene import Scene, simulate
+
+    if (on_sample is None) == (out is None or workers <= 0):
+        raise InputError("give either on_sample (in process) or out and workers > 0 (overlapped)")
     bs = plan.config.simulation.batch_size
-    for start in range(0, len(indices), bs):
-        batch = [plan.scenes[i] for i in indices[start:start + bs]]
-        scenes = [Scene(garment=plan.garment(s.garment), body=plan.body_model, betas=plan.betas[s.body],
-                        motion=plan.motion(s.motion)) for s in batch]
-        t0 = time.perf_counter()
-        results = simulate(scenes, plan.run_config, device=device,
-                           progress=(lambda d, n, b=len(batch): progress(0, d, n, b)) if progress else None)
-        for s, scene, r in zip(batch, scenes, results):
-            arrays = {f"metric_{k}": np.asarray(v) for k, v in r.metrics.items()}
-            arrays["metric_nan"] = arrays["metric_nan"].astype(np.uint8)
-            garment = plan.garment(s.garment)
-            if r.failure is None:
-                # the simulator returns the recorded frames' poses and posed body (no posing again)
-                t = sample_targets(garment.vertices, garment.faces, plan.subdivided, plan.betas[s.body], r.poses,
-                                   r.trans, r.positions, indicator=plan.correspondence(s.garment)["indicator"])
-                arrays.update({k: np.asarray(v, np.float32) for k, v in t.items()})
-                arrays["detail"] = r.positions.astype(np.float32)
-                arrays.update(pose=r.poses.astype(np.float32), trans=r.trans.astype(np.float32),
-                              label=np.full(len(r.positions), scene.motion.label, np.int32),
-                              body_vertices=r.body_vertices.astype(np.float32))
-            else:  # a failed scene keeps its metrics and reason, no frames
-                V, B = len(garment.vertices), plan.body_model.vertex_count
-                z = lambda *shape: np.zeros(shape, np.float32)  # noqa: E731
-                arrays.update({k: z(0, V, 3) for k in ("detail", "coarse", "anchor", "anchor_normal", "anchor_skin",
-                                                       "coarse_normal", "skin")})
-                arrays.update(joint_distance=z(0, V, 24), joints=z(0, 24, 3), pose=z(0, 24, 3), trans=z(0, 3),
-                              label=np.zeros(0, np.int32), body_vertices=z(0, B, 3))
-            scalars = {"garment": s.garment, "body": s.body, "motion": s.motion, "split": SPLIT_CODES[s.split],
-                       "failure": failure_code(r.failure), "failure_frame": r.failure_frame,
-                       "recorded_from": r.recorded_from,
-                       "seconds": (time.perf_counter() - t0) / len(batch)}
-            on_sample(s.index, arrays, scalars)
+    batches = [list(indices[k:k + bs]) for k in range(0, len(indices), bs)]
+    stats = {"simulate_seconds": 0.0, "garment_frames": 0, "wait_seconds": 0.0, "batches": len(batches)}
+    pool = None
+    if on_sample is None:
+        pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
+                                   initializer=_init_worker, initargs=(plan.config, str(out)))
+    try:
+        garments_ready: Future | None = None
+        pending: list[Future] = []
+        if pool is not None and batches:
+            garments_ready = _prefetch(pool, plan, batches[0], workers)
+        for k, idx in enumerate(batches):
+            batch = [plan.scenes[i] for i in idx]
+            if garments_ready is not None:
+                t = time.perf_counter()
+                for f in garments_ready:
+                    f.result()
+                stats["wait_seconds"] += time.perf_counter() - t
+            if pool is not None and k + 1 < len(batches):  # the next batch's garments while this one runs
+                garments_ready = _prefetch(pool, plan, batches[k + 1], workers)
+            scenes = [Scene(garment=plan.garment(s.garment), body=plan.body_model, betas=plan.betas[s.body],
+                            motion=plan.motion(s.motion)) for s in batch]
+            t0 = time.perf_counter()
+            results = simulate(scenes, plan.run_config, device=device,
+                               progress=(lambda d, n, b=len(batch): progress(0, d, n, b)) if progress else None)
+            seconds = time.perf_counter() - t0
+            stats["simulate_seconds"] += seconds
+            for s, scene, r in zip(batch, scenes, results, strict=True):
+                o = Outcome.of(r, scene.motion.label, seconds / len(batch))
+                stats["garment_frames"] += len(r.positions) if o.failure_code == 0 else 0
+                if pool is not None:
+                    pending.append(pool.submit(_finish, s, o))
+                else:
+                    on_sample(s.index, *sample_arrays(plan, s, o))
+            del results, scenes
+            pending = _collect(pending, block=False)
+        t = time.perf_counter()
+        _collect(pending, block=True)
+        stats["wait_seconds"] += time.perf_counter() - t
+    finally:
+        if pool is not None:
+            pool.shutdown(wait=True, cancel_futures=True)
+    return stats
+
+
+def _prefetch(pool: ProcessPoolExecutor, plan: Plan, batch: list[int], workers: int) -> list[Future]:
+    """Build the batch's garments not yet in this process, spread over the workers."""
+    todo = sorted(g for g in {plan.scenes[i].garment for i in batch} if not plan.has_garment(g))
+    return [pool.submit(_build_garments, todo[w::workers]) for w in range(min(workers, len(todo)))]
+
+
+def _collect(pending: list[Future], *, block: bool) -> list[Future]:
+    """Raise the first worker error; return the futures not yet done (none when ``block``)."""
+    left = []
+    for f in pending:
+        if block or f.done():
+            f.result()
+        else:
+            left.append(f)
+    return left

@@ -83,6 +83,10 @@ def store_info(path: str | Path) -> dict[str, Any]:
         size["on_disk"] = directory_bytes(path / group)
     info["sizes"] = dict(sorted(sizes.items(), key=lambda kv: -kv[1]["on_disk"]))
     info["size_on_disk"] = directory_bytes(path)
+    frames = int(T.sum())
+    per_frame = sum(sizes.get(g, {}).get("on_disk", 0) for g in ("vertex_frames", "frames"))
+    info["bytes_per_garment_frame"] = per_frame / frames if frames else None
+    info["fit"] = {"fitted": attrs.get("fit_attribute"), **(attrs.get("fit_diagnostics") or {})}
     ff = idx["failure_frame"]
     info["failures"] = _failure_rows(failure, split, ff, failure_names)
     return info
@@ -131,6 +135,20 @@ def _bytes(n: int) -> str:
     return str(n)
 
 
+def _fit_lines(fit: dict) -> list[str]:
+    if not fit.get("fitted"):
+        return ["fit attribute: none (the config's fit_attribute is false; garments/alpha is NaN)"]
+    out = [f"fit attribute: {fit.get('factors')} factors over {fit.get('features')} features from {fit.get('pairs')} "
+           f"training pairs; {fit.get('saturated_features')} features at the noise floor"]
+    if fit.get("alpha_seed_spread"):
+        spread = ", ".join(f"α{k + 1} {v:.3g} (range {r:.3g})"
+                           for k, (v, r) in enumerate(zip(fit["alpha_seed_spread"], fit.get("alpha_range", []),
+                                                          strict=False)))
+        out.append(f"  α's largest change across subsample seeds: {spread}")
+    out += [f"  warning: {w}" for w in fit.get("warnings", [])]
+    return out
+
+
 def format_store_info(info: dict[str, Any]) -> str:
     """:func:`store_info` as a plain-text table."""
     state = "complete" if info["complete"] else "NOT PACKED (generation in progress or pack() interrupted)"
@@ -157,6 +175,9 @@ def format_store_info(info: dict[str, Any]) -> str:
             lines.append(f"{group:<15}{_bytes(sz['on_disk']):>12}{_bytes(sz['uncompressed']):>14}{ratio:>8.2f}")
         lines.append(f"{'total':<15}{_bytes(info['size_on_disk']):>12}"
                      f"{_bytes(sum(v['uncompressed'] for v in info['sizes'].values())):>14}")
+        if info.get("bytes_per_garment_frame"):
+            lines.append(f"per stored garment-frame (vertex_frames + frames): {_bytes(info['bytes_per_garment_frame'])}")
+        lines += [""] + _fit_lines(info.get("fit") or {})
     lines += ["", f"{'failure':<20}{'code':>5}{'count':>8}{'share':>8}" + "".join(f"{s:>7}" for s in SPLIT_NAMES)
               + f"{'median frame':>14}"]
     for row in info["failures"]:

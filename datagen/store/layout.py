@@ -90,6 +90,7 @@ def chunk_layout(spec: ArraySpec, shape: tuple[int, ...], chunking: Chunking | N
         chunk_rows = shard_rows = max(1, rows)
     else:
         shard_rows = min(shard_rows, -(-rows // chunk_rows) * chunk_rows)
+    tail = tuple(max(1, t) for t in tail)  # an empty axis (D = 0: no fit attribute) still has a chunk size
     return (chunk_rows, *tail), (shard_rows, *tail)
 
 

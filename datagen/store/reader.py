@@ -22,8 +22,18 @@ from typing import Any
 import numpy as np
 
 from datagen.errors import InputError
+from datagen.geometry.positions import decode_positions
 from datagen.store.layout import read_root_attributes
-from schemas.dataset import ARRAYS, DATASET_SCHEMA_VERSION, NAME_LISTS, SPLIT_NAMES, STATIC_GROUPS, STORE_FORMAT
+from schemas.dataset import (
+    ARRAYS,
+    DATASET_SCHEMA_VERSION,
+    DERIVED,
+    NAME_LISTS,
+    REFUSED_VERSIONS,
+    SPLIT_NAMES,
+    STATIC_GROUPS,
+    STORE_FORMAT,
+)
 
 logger = logging.getLogger(__name__)
 
@@ -33,6 +43,22 @@ SIM_FRAME_ARRAYS = tuple(a.name for a in ARRAYS.values() if a.table == "sim_fram
 SAMPLE_SCALARS = tuple(a.name for a in ARRAYS.values() if a.table == "sample")
 _PATH = {a.name: a.path for a in ARRAYS.values() if a.written_by == "stage_sample"}
 _DTYPE = {a.name: np.dtype(a.dtype) for a in ARRAYS.values() if a.written_by == "stage_sample"}
+_QUANTUM = {a.name: a.quantum for a in ARRAYS.values() if a.quantum is not None}
+DERIVED_ARRAYS = tuple(n for n in DERIVED if n not in FRAME_ARRAYS)
+"""Per-frame arrays the reader derives on request (:mod:`datagen.geometry.features`), by name."""
+DERIVED_VERTEX_ARRAYS = tuple(n for n in DERIVED_ARRAYS if n != "body_vertices")
+BINDING_CACHE_SIZE = 256
+"""Garment bindings (static data of one garment instance on its body) kept per open store."""
+
+
+def version_problem(path, version) -> str | None:
+    """Why a store of schema ``version`` cannot be read (None when it can)."""
+    if version == DATASET_SCHEMA_VERSION:
+        return None
+    why = REFUSED_VERSIONS.get(version, "it is not a version this drape knows")
+    return (f"store {path} has schema version {version}; this drape reads version {DATASET_SCHEMA_VERSION} "
+            f"({why}). Make the store again: `drape generate --config CONFIG --out NEW` with the config it was made "
+            "with (`drape info` prints it; a store is a pure function of its config and seed)")
 
 TENSORSTORE_CACHE_BYTES = 64 * 1024 * 1024
 """Tensorstore's chunk and shard-index cache per open store (decoded chunks read again are free)."""
@@ -136,9 +162,9 @@ class DatasetStore:
         attrs = read_root_attributes(path)
         if attrs is None or attrs.get("format") != STORE_FORMAT:
             raise InputError(f"{path} is not a drape dataset store (no zarr.json with format '{STORE_FORMAT}')")
-        if attrs.get("schema_version") != DATASET_SCHEMA_VERSION:
-            raise InputError(f"store {path} has schema version {attrs.get('schema_version')}; this drape reads "
-                             f"version {DATASET_SCHEMA_VERSION}")
+        problem = version_problem(path, attrs.get("schema_version"))
+        if problem:
+            raise InputError(problem)
         if attrs.get("complete") is not True:
             raise InputError(f"store {path} is not complete: its pack() has not finished. Run generation (or "
                              "StoreWriter.pack()) on it again")
@@ -153,6 +179,9 @@ class DatasetStore:
         self.backend: str = self._backend_cls.name
         self._rows = None
         self._index: dict[str, np.ndarray] | None = None
+        self._bindings: dict[int, Any] = {}  # garment instance -> GarmentBinding
+        self._body: dict[str, np.ndarray] | None = None
+        self._shapes: dict[int, Any] = {}
 
     def __repr__(self) -> str:
         return f"DatasetStore({str(self.path)!r}, samples={self.sample_count}, backend={self.backend!r})"
@@ -160,6 +189,7 @@ class DatasetStore:
     def __getstate__(self) -> dict:
         state = self.__dict__.copy()
         state["_rows"] = None  # reopened lazily in the other process
+        state["_bindings"], state["_shapes"] = {}, {}  # rebuilt on use (tensors do not cross processes)
         return state
 
     def __len__(self) -> int:
@@ -259,9 +289,11 @@ class DatasetStore:
 
     def sample(self, i: int, *, names: Sequence[str] | None = None) -> dict[str, Any]:
         """Everything of sample ``i``: vertex-frame arrays [T, V, k], frame arrays [T, ...],
-        simulation-frame metrics [T_sim] and the scalars; ``names`` limits the arrays read."""
+        simulation-frame metrics [T_sim] and the scalars; ``names`` limits the arrays read and may
+        name derived arrays (:data:`DERIVED_ARRAYS`; by default none are derived)."""
         i = self._check(i)
-        names = self._names(names, VERTEX_FRAME_ARRAYS + FRAME_ARRAYS + SIM_FRAME_ARRAYS)
+        names = self._names(names, VERTEX_FRAME_ARRAYS + FRAME_ARRAYS + SIM_FRAME_ARRAYS + DERIVED_ARRAYS,
+                            default=VERTEX_FRAME_ARRAYS + FRAME_ARRAYS + SIM_FRAME_ARRAYS)
         out = self._read_frames(i, 0, self.frame_count(i), [n for n in names if n not in SIM_FRAME_ARRAYS],
                                 extra=[n for n in names if n in SIM_FRAME_ARRAYS])
         out.update(self.scalars(i))
@@ -274,14 +306,19 @@ class DatasetStore:
         Args:
             i: sample index.
             frames: a slice, one frame, or frame indices (in any order) of the sample's T frames.
-            names: arrays to read (default: every vertex-frame and frame array).
+            names: arrays to read (default: every stored vertex-frame and frame array), stored or
+                derived (:data:`DERIVED_ARRAYS`: ``anchor``, ``anchor_normal``, ``anchor_skin``,
+                ``skin``, ``coarse_normal``, ``joint_distance``, ``body_vertices``), which are
+                computed from the stored ones by :func:`datagen.geometry.features.derive`.
 
         Returns:
-            name -> [n, V, k] (vertex-frame) or [n, ...] (frame) for the n selected frames.
+            name -> [n, V, k] (vertex-frame) or [n, ...] (frame) for the n selected frames, float32
+            metres for positions (decoded from their quantised steps).
         """
         i = self._check(i)
         T = self.frame_count(i)
-        names = self._names(names, VERTEX_FRAME_ARRAYS + FRAME_ARRAYS)
+        names = self._names(names, VERTEX_FRAME_ARRAYS + FRAME_ARRAYS + DERIVED_ARRAYS,
+                            default=VERTEX_FRAME_ARRAYS + FRAME_ARRAYS)
         if isinstance(frames, slice):
             start, stop, step = frames.indices(T)
             if step == 1:
@@ -308,15 +345,41 @@ class DatasetStore:
         i = self._check(i)
         return self._read_frames(i, 0, 0, [], extra=self._names(names, SIM_FRAME_ARRAYS))
 
-    def _names(self, names: Sequence[str] | None, allowed: tuple[str, ...]) -> list[str]:
+    def _names(self, names: Sequence[str] | None, allowed: tuple[str, ...], default: tuple[str, ...] | None = None
+               ) -> list[str]:
         if names is None:
-            return list(allowed)
+            return list(default or allowed)
         unknown = [n for n in names if n not in allowed]
         if unknown:
             raise InputError(f"unknown array name(s) {unknown}; choose from {list(allowed)}")
         return list(names)
 
     def _read_frames(self, i: int, t0: int, t1: int, names: Sequence[str], extra: Sequence[str] = ()
+                     ) -> dict[str, np.ndarray]:
+        derived = [n for n in names if n in DERIVED_ARRAYS]
+        if not derived and not any(n in _QUANTUM for n in names):
+            return self._read_stored(i, t0, t1, names, extra)
+        stored = [n for n in names if n not in DERIVED_ARRAYS]
+        inputs = {k for n in derived for k in DERIVED[n]} | ({"joints"} if any(n in _QUANTUM for n in stored) else set())
+        read = list(dict.fromkeys([*stored, *sorted(inputs)]))
+        data = self._read_stored(i, t0, t1, read, extra)
+        for n in _QUANTUM:
+            if n in data:  # steps of quantum from the root joint (datagen.geometry.features.encode_positions)
+                data[n] = decode_positions(data[n], data["joints"][:, 0], _QUANTUM[n])
+        if derived:
+            if t1 > t0:
+                from datagen.geometry.features import derive  # torch: imported when first needed
+
+                data.update(derive(self.binding(int(self.index["garment"][i])), derived, pose=data.get("pose"),
+                                   trans=data.get("trans"), coarse=data.get("coarse"), joints=data.get("joints")))
+            else:
+                V, B = self.vertex_count(i), self._body_model_arrays()["v_template"].shape[0]
+                for n in derived:
+                    tail = (B, 3) if n == "body_vertices" else (V, 24 if n == "joint_distance" else 3)
+                    data[n] = np.zeros((0, *tail), np.float32)
+        return {n: data[n] for n in [*names, *extra]}
+
+    def _read_stored(self, i: int, t0: int, t1: int, names: Sequence[str], extra: Sequence[str] = ()
                      ) -> dict[str, np.ndarray]:
         idx = self.index
         V = int(idx["vertex_count"][i])
@@ -401,8 +464,32 @@ class DatasetStore:
 
     def body_model(self) -> dict[str, np.ndarray]:
         """The SMPL-format body model: ``v_template`` [B, 3], ``shapedirs`` [B, 3, S], ``J_regressor``
-        [J, B], ``weights`` [B, J], ``parents`` [J], ``faces`` [Fb, 3]."""
-        return self.group("body")
+        [J, B], ``weights`` [B, J], ``parents`` [J], ``faces`` [Fb, 3], and the subdivided body's
+        recipe: ``subdivision_edges`` [E, 2] (vertex B + e is edge e's midpoint) and
+        ``subdivided_faces`` [4 Fb, 3]."""
+        return dict(self._body_model_arrays())
+
+    def _body_model_arrays(self) -> dict[str, np.ndarray]:
+        if self._body is None:
+            self._body = self.group("body")
+        return self._body
+
+    def binding(self, g: int):
+        """What deriving garment instance ``g``'s features needs (its rest mesh, indicator rows of the
+        subdivided body, its body's shape): :func:`datagen.geometry.features.bind_garment`, cached.
+        Trainers call :func:`datagen.geometry.features.derive` with it on their own device."""
+        from datagen.geometry.features import bind_garment, body_shape
+
+        if g not in self._bindings:
+            garment = self.garment(g)
+            b = int(garment["body"])
+            if b not in self._shapes:
+                self._shapes[b] = body_shape(self._body_model_arrays(), self.betas()[b])
+            if len(self._bindings) >= BINDING_CACHE_SIZE:
+                self._bindings.pop(next(iter(self._bindings)))
+            self._bindings[g] = bind_garment(self._shapes[b], garment["rest_vertices"], garment["faces"],
+                                             garment["indicator"])
+        return self._bindings[g]
 
     def betas(self) -> np.ndarray:
         """Shape coefficients of every body, [n_bodies, S]."""
@@ -414,5 +501,6 @@ class DatasetStore:
 
     def fit_model(self) -> dict[str, np.ndarray]:
         """The fit-attribute factor-analysis model: ``components`` [3, D], ``mean`` [D],
-        ``noise_variance`` [D], ``subsample`` [D]."""
+        ``noise_variance`` [D], ``subsample`` [3]; D = 0 when the store has no fit attribute (root
+        attribute ``fit_attribute`` false; its health is in ``attrs["fit_diagnostics"]``)."""
         return self.group("fit")

@@ -217,6 +217,7 @@ def validate(path: str | Path, *, check_values: bool = True) -> list[str]:
     checker = _Checker(arrays, attrs, n, problems)
     checker.offsets()
     checker.values(check_values)
+    checker.subdivision()
     checker.samples()
     checker.segments()
     checker.splits()
@@ -358,6 +359,11 @@ class _Checker:
                 continue
             reported = 0
             for start, block in _blocks(arr):
+                if is_float and spec.finite == "fitted" and self.attrs.get("fit_attribute") is False:
+                    if not np.isnan(block).all():
+                        self.say(f"'{path}' must be NaN everywhere: the store has no fit attribute "
+                                 "(root attribute fit_attribute is false)")
+                    continue
                 if is_float and spec.finite == "ok_samples" and failed_rows is not None:
                     skip = failed_rows[start:start + len(block)]
                     if skip.any():  # a failed sample's metrics may be inf/nan
@@ -370,6 +376,20 @@ class _Checker:
                     reported += 1
                     if reported >= MAX_PROBLEMS_PER_CHECK:
                         break
+
+    def subdivision(self) -> None:
+        """The subdivided body's triangles and the garments' indicator index its B + E vertices."""
+        B, E = self.n.get("B"), self.n.get("E")
+        if B is None or E is None:
+            return
+        for path in ("body/subdivided_faces", "garments/indicator"):
+            v = self.get(path)
+            if v is not None and v.size and (v.min() < 0 or v.max() >= B + E):
+                self.say(f"'{path}' has values {int(v.min())} .. {int(v.max())}; the subdivided body has B + E = "
+                         f"{B + E} vertices")
+        if self.attrs.get("fit_attribute") is not (self.n.get("D", 0) > 0):
+            self.say(f"root attribute fit_attribute is {self.attrs.get('fit_attribute')!r} but fit/ has D = "
+                     f"{self.n.get('D')} features (D = 0 means no fit attribute)")
 
     def _where(self, spec: ArraySpec, rows: np.ndarray) -> str:
         """' (sample i, frame t, vertex v)' for the first bad row of a per-sample table."""

@@ -56,6 +56,7 @@ from datagen.store.layout import (
     unique_temporary,
     write_json_atomic,
 )
+from datagen.geometry.positions import encode_positions
 from datagen.store.validate import Dimensions, value_problems
 from schemas.dataset import (
     ARRAYS,
@@ -86,13 +87,16 @@ SAMPLE_SCALARS: dict[str, ArraySpec] = {a.name: a for a in ARRAYS.values()
 _FRAME_ARRAYS = tuple(n for n, a in SAMPLE_ARRAYS.items() if a.table in ("vertex_frame", "frame"))
 _SIM_ARRAYS = tuple(n for n, a in SAMPLE_ARRAYS.items() if a.table == "sim_frame")
 _RANGED = tuple(n for n, a in SAMPLE_ARRAYS.items() if a.codes)  # code arrays whose range pack checks
+_QUANTISED = tuple(n for n, a in SAMPLE_ARRAYS.items() if a.quantum is not None)
 
 
-def compressor():
-    """The chunk compressor of ``schemas.dataset.COMPRESSION`` (tensorstore's zarr3 driver reads it)."""
+def compressor(spec: ArraySpec | None = None):
+    """The chunk compressor of ``spec`` (``schemas.dataset.COMPRESSION`` unless the spec names its own;
+    tensorstore's zarr3 driver reads both)."""
     from zarr.codecs import BloscCodec
 
-    return BloscCodec(cname=COMPRESSION["cname"], clevel=COMPRESSION["clevel"], shuffle=COMPRESSION["shuffle"])
+    c = (spec.compression if spec is not None else None) or COMPRESSION
+    return BloscCodec(cname=c["cname"], clevel=c["clevel"], shuffle=c["shuffle"])
 
 
 # ------------------------------------------------------------------------------------------ checks
@@ -107,6 +111,12 @@ def _cast(spec: ArraySpec, value: Any, name: str, where: str, problems: list[str
         return None
     target = np.dtype(spec.dtype)
     kind = arr.dtype.kind
+    if spec.quantum is not None:  # positions handed in metres, quantised once the root joints are known
+        if kind != "f":
+            problems.append(f"{where}: '{name}' has dtype {arr.dtype}; give float positions in metres (the store "
+                            f"keeps them as {spec.dtype} steps of {spec.quantum} m)")
+            return None
+        return arr.astype(np.float64, copy=False)
     if target.kind == "f":
         if kind != "f":
             problems.append(f"{where}: '{name}' has dtype {arr.dtype}; the schema says {spec.dtype} (give floats)")
@@ -132,12 +142,13 @@ def _raise(problems: list[str], hint: str) -> None:
 
 def check_sample(index: int, arrays: Mapping[str, Any], scalars: Mapping[str, Any], *, sample_count: int,
                  failure_names: list[str] | tuple[str, ...], garment_vertex_counts: np.ndarray | None = None,
-                 body_vertex_count: int | None = None) -> tuple[dict[str, np.ndarray], dict[str, int | float], dict]:
+                 ) -> tuple[dict[str, np.ndarray], dict[str, int | float], dict]:
     """Check one sample against the schema and cast it to the schema's dtypes.
 
     Returns:
-        (arrays, scalars, dims): arrays as stored (no frame arrays for a failed sample), scalars as
-        Python numbers, and the bound sizes ``{"T", "V", "T_sim", "B"}`` (V, B None when unknown).
+        (arrays, scalars, dims): arrays as stored (no frame arrays for a failed sample; positions
+        quantised), scalars as Python numbers, and the bound sizes ``{"T", "V", "T_sim"}`` (V None
+        when unknown).
 
     Raises:
         InputError: naming every array or scalar that is missing, unknown, of the wrong dtype or
@@ -195,7 +206,7 @@ def check_sample(index: int, arrays: Mapping[str, Any], scalars: Mapping[str, An
 
     T = dims.sizes.get("T", 0)
     T_sim = dims.sizes["T_sim"]
-    V, B = dims.sizes.get("V"), dims.sizes.get("B")
+    V = dims.sizes.get("V")
     if failed and T:
         problems.append(f"{where} failed (failure = {out_scalars['failure']}) but has {T} recorded frames; a failed "
                         "sample has none: drop its frame arrays (or give them with T = 0)")
@@ -218,13 +229,13 @@ def check_sample(index: int, arrays: Mapping[str, Any], scalars: Mapping[str, An
         elif V is not None and T and V != garment_vertex_counts[g]:
             problems.append(f"{where}: its arrays have V = {V} vertices but garment instance {g} has "
                             f"{garment_vertex_counts[g]}")
-    if body_vertex_count is not None and B is not None and T and B != body_vertex_count:
-        problems.append(f"{where}: body_vertices has B = {B} vertices but the staged body model has "
-                        f"{body_vertex_count}")
     _raise(problems, "Fix the sample and stage it again.")
     if failed:
         out = {n: a for n, a in out.items() if n in _SIM_ARRAYS}
-    return out, out_scalars, {"T": T, "V": V if T else None, "T_sim": T_sim, "B": B if T else None}
+    else:
+        for name in _QUANTISED:
+            out[name] = encode_positions(out[name], out["joints"][:, 0], SAMPLE_ARRAYS[name].quantum)
+    return out, out_scalars, {"T": T, "V": V if T else None, "T_sim": T_sim}
 
 
 def check_static(group: str, arrays: Mapping[str, Any], names: Mapping[str, Any] | None = None
@@ -266,6 +277,8 @@ def check_static(group: str, arrays: Mapping[str, Any], names: Mapping[str, Any]
     for name, arr in out.items():
         spec = specs[name]
         upper = len(out_names[spec.codes]) if spec.codes in out_names else dims.sizes.get(spec.index_of or "")
+        if spec.finite == "fitted" and np.isnan(arr).all():  # no fit attribute in this store
+            continue
         if spec.unit != "row":
             problems += [f"{where}: {p}" for p in value_problems(spec, arr, name=name, upper=upper)]
     if group == "garments":
@@ -322,7 +335,6 @@ class StoreWriter:
         self.segment_length: int = identity["segment_length"]
         self.failure_names: list[str] = identity["failure_names"]
         self._garment_vertex_counts: np.ndarray | None = None
-        self._body_vertex_count: int | None = None
 
     # -- opening
 
@@ -482,8 +494,7 @@ class StoreWriter:
             return False
         arrays, scalars, dims = check_sample(index, arrays, scalars, sample_count=self.sample_count,
                                              failure_names=self.failure_names,
-                                             garment_vertex_counts=self._staged_garment_vertex_counts(),
-                                             body_vertex_count=self._staged_body_vertex_count())
+                                             garment_vertex_counts=self._staged_garment_vertex_counts())
         ranges = {n: [int(arrays[n].min()), int(arrays[n].max())] for n in _RANGED if n in arrays and arrays[n].size}
         manifest = {"kind": "sample", "sample": int(index), "store": self._digest, "scalars": scalars, "dims": dims,
                     "arrays": {n: {"shape": list(a.shape), "dtype": str(a.dtype)} for n, a in arrays.items()},
@@ -493,7 +504,8 @@ class StoreWriter:
             logger.debug("staged sample %d (T = %d, T_sim = %d)", index, dims["T"], dims["T_sim"])
         return written
 
-    def stage_static(self, group: str, arrays: Mapping[str, Any], names: Mapping[str, Any] | None = None) -> bool:
+    def stage_static(self, group: str, arrays: Mapping[str, Any], names: Mapping[str, Any] | None = None, *,
+                     diagnostics: Mapping[str, Any] | None = None) -> bool:
         """Check a static group against the schema and stage it atomically (once per store).
 
         Args:
@@ -501,6 +513,8 @@ class StoreWriter:
             arrays: the group's arrays by name (schemas.dataset, paths ``group/name``).
             names: the code name lists this group brings: ``bodies``: body_names; ``motions``:
                 label_names; ``garments``: garment_type_names, material_names, region_names.
+            diagnostics: ``fit`` only: the factor analysis's health (JSON; root attribute
+                ``fit_diagnostics``). A fit group with D = 0 features means "no fit attribute".
 
         Returns:
             True if staged now, False if the group was already staged or packed.
@@ -509,7 +523,10 @@ class StoreWriter:
             logger.debug("static group %s is already in %s; not staged again", group, self.path)
             return False
         arrays, names, dims = check_static(group, arrays, names)
+        if diagnostics is not None and group != "fit":
+            raise InputError(f"diagnostics are given with the fit group only, not with {group!r}")
         manifest = {"kind": "static", "group": group, "store": self._digest, "names": names, "dims": dims,
+                    "diagnostics": to_json(dict(diagnostics or {}), "diagnostics"),
                     "arrays": {n: {"shape": list(a.shape), "dtype": str(a.dtype)} for n, a in arrays.items()},
                     "drape_version": __version__}
         return self._stage_dir(static_dir_name(group), arrays, manifest)
@@ -555,13 +572,6 @@ class StoreWriter:
             if (f.parent / MARKER).is_file():
                 self._garment_vertex_counts = np.diff(np.load(f))
         return self._garment_vertex_counts
-
-    def _staged_body_vertex_count(self) -> int | None:
-        if self._body_vertex_count is None:
-            d = self.staging / static_dir_name("body")
-            if (d / MARKER).is_file():
-                self._body_vertex_count = int(json.loads((d / MARKER).read_text())["dims"]["B"])
-        return self._body_vertex_count
 
     # -- packing
 
@@ -663,7 +673,6 @@ class _PackPlan:
         V_g = np.diff(gv)
         sizes = {g: self.static[g]["dims"] for g in STATIC_GROUPS}
         G, n_bodies, M = len(V_g), sizes["bodies"]["n_bodies"], sizes["motions"]["M"]
-        B = sizes["body"]["B"]
         names = {k: v for g in STATIC_GROUPS for k, v in self.static[g]["names"].items()}
         names["split_names"], names["failure_names"] = list(SPLIT_NAMES), writer.failure_names
         self.names = names
@@ -677,6 +686,11 @@ class _PackPlan:
         gbody = np.load(staging / static_dir_name("garments") / "body.npy")
         for g in np.flatnonzero(gbody >= n_bodies)[:10]:
             problems.append(f"garment instance {g}: body {gbody[g]} is out of range (the store has {n_bodies} bodies)")
+        alpha = np.load(staging / static_dir_name("garments") / "alpha.npy")
+        fitted = sizes["fit"]["D"] > 0
+        if alpha.size and (np.isnan(alpha).all() if fitted else not np.isnan(alpha).all()):
+            problems.append("garments/alpha must be finite when fit/ has features and NaN when it has none (D = 0: "
+                            f"no fit attribute); fit/ has D = {sizes['fit']['D']}")
         n_labels = len(names["label_names"])
         mlabel = np.load(staging / static_dir_name("motions") / "label.npy")
         for k in np.flatnonzero(mlabel >= n_labels)[:10]:
@@ -690,8 +704,6 @@ class _PackPlan:
             if g < G and m["dims"]["V"] != V_g[g]:
                 problems.append(f"sample {i}: V = {m['dims']['V']} vertices but garment instance {g} has {V_g[g]}; "
                                 f"restage the sample (delete {staging / sample_dir_name(i)})")
-            if m["dims"]["B"] != B:
-                problems.append(f"sample {i}: body_vertices has B = {m['dims']['B']} but the body model has {B}")
             lo, hi = m["ranges"].get("label", (0, 0))
             if hi >= n_labels:
                 problems.append(f"sample {i}: label code {hi} but label_names has {n_labels} names")
@@ -765,8 +777,10 @@ class _Packer:
         for name, data in (("index/frame_start", p.frame_start), ("index/vertex_row_start", p.vertex_row_start),
                            ("index/sim_frame_start", p.sim_frame_start), ("index/segments", p.segments)):
             self._write(root, ARRAYS[name], data.shape, [data])
+        fit = p.static["fit"]
         attrs = {"format": STORE_FORMAT, **self.w._identity, "drape_version": __version__, "complete": False,
-                 "units": {s.path: s.unit for s in ARRAYS.values()}, **p.names}
+                 "units": {s.path: s.unit for s in ARRAYS.values()}, **p.names,
+                 "fit_attribute": bool(fit["dims"]["D"] > 0), "fit_diagnostics": fit.get("diagnostics", {})}
         root.attrs.put(attrs)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec": we know
@@ -821,10 +835,14 @@ class _Packer:
 
     def _write(self, root, spec: ArraySpec, shape: tuple[int, ...], blocks) -> None:
         chunks, shards = chunk_layout(spec, shape, self.chunking.get(spec.table))
+        attributes = {"unit": spec.unit, "doc": spec.doc, "table": spec.table}
+        if spec.quantum is not None:
+            attributes |= {"quantum": spec.quantum, "origin": "frames/joints[:, 0]",
+                           "decode": "value * quantum + the frame's root joint (frames/joints[:, 0]), in metres"}
         arr = root.create_array(spec.path, shape=shape, dtype=spec.dtype, chunks=chunks, shards=shards,
-                                compressors=compressor(), fill_value=0, overwrite=True,
+                                compressors=compressor(spec), fill_value=0, overwrite=True,
                                 dimension_names=[str(s) if isinstance(s, str) else None for s in spec.shape],
-                                attributes={"unit": spec.unit, "doc": spec.doc, "table": spec.table})
+                                attributes=attributes)
         if shape[0] == 0:
             return
         sink = _RowSink(arr, shards[0])

@@ -21,6 +21,7 @@ from datagen.targets.features import (
     relative_skinning,
     sample_targets,
     skinning_transforms,
+    stored_targets,
     vertex_normals,
 )
 from datagen.targets.fit import (
@@ -30,6 +31,7 @@ from datagen.targets.fit import (
     factor_scores,
     fit_attribute,
     fit_attribute_model,
+    fit_diagnostics,
     fit_pair,
     subsampled_distances,
 )
@@ -44,6 +46,7 @@ __all__ = [
     "factor_scores",
     "fit_attribute",
     "fit_attribute_model",
+    "fit_diagnostics",
     "fit_pair",
     "garment_body_distances",
     "garment_correspondence",
@@ -56,5 +59,6 @@ __all__ = [
     "sample_targets",
     "skinning_transforms",
     "smooth_vertices",
+    "stored_targets",
     "vertex_normals",
 ]

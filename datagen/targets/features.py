@@ -49,6 +49,7 @@ __all__ = [
     "TARGET_NAMES",
     "sample_targets",
     "skinning_transforms",
+    "stored_targets",
     "vertex_normals",
 ]
 
@@ -346,3 +347,20 @@ def sample_targets(garment_rest: np.ndarray, faces: np.ndarray, subdivided_model
         "joints": joints,
     }
     return {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in out.items()}
+
+
+def stored_targets(faces: np.ndarray, model: BodyModel, betas, poses: np.ndarray, trans: np.ndarray,
+                   detail: np.ndarray, *, smoothing: SmoothingConfig = SmoothingConfig(),
+                   operator: sp.spmatrix | None = None) -> dict[str, np.ndarray]:
+    """What a dataset store keeps of :func:`sample_targets` (float32): ``coarse`` [T, V, 3] and
+    ``joints`` [T, 24, 3]. Every other target is a cheap function of these and the static data, and
+    is derived on read (:mod:`datagen.geometry.features`)."""
+    poses, trans = _check_motion(model, poses, trans)
+    detail = np.asarray(detail, dtype=np.float64)
+    if detail.ndim != 3 or detail.shape[0] != poses.shape[0] or detail.shape[2] != 3:
+        raise InputError(f"detail must be [T={poses.shape[0]}, V, 3], got {detail.shape}")
+    if not np.isfinite(detail).all():
+        raise InputError("detail has non-finite values; reject the sample before computing targets")
+    _, posed_joints, _ = skinning_transforms(model, betas, poses)
+    coarse = coarse_from_detail(detail, np.asarray(faces, dtype=np.int64), smoothing, operator=operator)
+    return {"coarse": coarse.astype(np.float32), "joints": (posed_joints + trans[:, None]).astype(np.float32)}

@@ -297,3 +297,48 @@ def fit_attribute(model: FitAttributeModel | Mapping[str, np.ndarray], pair: Fit
         model = FitAttributeModel.from_arrays(model)
     d_star = subsampled_distances(pair, model.subsample_count, model.subsample_seed)
     return factor_scores(d_star, model.components, model.mean, model.noise_variance)
+
+
+NOISE_FLOOR = 1e-11
+"""Noise variance (m²) at or below which a feature counts as saturated: scikit-learn clips Ψ at 1e-12."""
+
+PAIR_MARGIN = 5
+"""A fit with fewer than factors + this many training pairs is flagged as having too few pairs."""
+
+
+def fit_diagnostics(train_pairs: Sequence[FitPair], all_pairs: Sequence[FitPair], model: FitAttributeModel, *,
+                    seeds: Sequence[int] = (1, 2, 3), random_state: int = 0) -> dict:
+    """How far a fitted model can be trusted: JSON data recorded in the store (``fit_diagnostics``).
+
+    Returns:
+        ``pairs``, ``factors``, ``features`` (N_g*); ``saturated_features`` (noise variance at
+        scikit-learn's floor: the factors explain those features exactly, a sign of too few pairs);
+        ``alpha_seed_spread`` [F]: the largest change of each α component over ``all_pairs`` when the
+        model is fitted again with the subsample seed moved by each of ``seeds`` (each refitted
+        factor's sign matched to the original's); ``warnings``: what a user should know, in words.
+    """
+    F, N = model.factor_count, model.subsample_count
+    base = np.stack([fit_attribute(model, p) for p in all_pairs])
+    spread = np.zeros(F)
+    for k in seeds:
+        other = fit_attribute_model(train_pairs, factor_count=F, subsample_count=N,
+                                    subsample_seed=model.subsample_seed + int(k), random_state=random_state)
+        alpha = np.stack([fit_attribute(other, p) for p in all_pairs])
+        sign = np.where(np.sum(alpha * base, axis=0) < 0, -1.0, 1.0)
+        spread = np.maximum(spread, np.abs(alpha * sign - base).max(axis=0))
+    saturated = int(np.count_nonzero(np.asarray(model.noise_variance) <= NOISE_FLOOR))
+    out = {"pairs": len(train_pairs), "factors": F, "features": N, "saturated_features": saturated,
+           "alpha_seed_spread": [float(x) for x in spread], "alpha_range": [float(x) for x in np.ptp(base, axis=0)],
+           "warnings": []}
+    if len(train_pairs) < F + PAIR_MARGIN:
+        out["warnings"].append(f"only {len(train_pairs)} training garment-body pairs for {F} factors (fewer than "
+                               f"{F + PAIR_MARGIN}): the factor analysis is underdetermined")
+    if saturated:
+        out["warnings"].append(f"{saturated} of {N} features have noise variance at the floor ({NOISE_FLOOR:g} m²): "
+                               "the model is saturated (it reproduces the training pairs exactly)")
+    unstable = [i for i in range(F) if spread[i] > 0.1 * max(float(np.ptp(base[:, i])), 1e-12)]
+    if unstable:
+        out["warnings"].append("α is unstable across subsample seeds: component(s) "
+                               + ", ".join(f"α{i + 1} moves by {spread[i]:.3g}" for i in unstable)
+                               + " (more than 10 % of its range over the pairs)")
+    return out

@@ -73,13 +73,39 @@ def test_store_validates_and_holds_every_sample(local_store):
     print(f"\nmicro store: {len(ok)} of 5 samples ok; failures "
           f"{[s.scalars(i)['failure'] for i in range(5)]}")
     for i in ok:
-        x = s.sample(i)
+        x = s.sample(i, names=["detail", "coarse", "joints", "trans", "anchor", "anchor_skin", "joint_distance",
+                               "body_vertices"])
         T, V = x["detail"].shape[:2]
         assert T == 6 and x["coarse"].shape == (T, V, 3) and x["joint_distance"].shape == (T, V, 24)
-        # the paper's displacements are derivable: detail = anchor + Δ_coarse + Δ_detail
+        assert x["body_vertices"].shape == (T, s.body_model()["v_template"].shape[0], 3)
         assert np.isfinite(x["detail"]).all()
+        # derived on read, as schema 3 stored them: anchor_skin = anchor - trans, distances to the joints
+        np.testing.assert_allclose(x["anchor_skin"], x["anchor"] - x["trans"][:, None], atol=1e-6)
+        np.testing.assert_allclose(x["joint_distance"][:, :, 0],
+                                   np.linalg.norm(x["coarse"] - x["joints"][:, None, 0], axis=-1), atol=1e-5)
         g = s.garment(int(s.scalars(i)["garment"]))
         assert len(g["rest_vertices"]) == V
+    # four training pairs for three factors: fitted, but flagged and recorded
+    d = s.attrs["fit_diagnostics"]
+    assert s.attrs["fit_attribute"] is True and d["pairs"] == 4 and d["factors"] == 3
+    assert any("only 4 training garment-body pairs" in w for w in d["warnings"]), d
+    assert len(d["alpha_seed_spread"]) == 3
+
+
+def test_a_store_without_the_fit_attribute(tmp_path):
+    """paper 001's kind of store: one garment on one body in training, no fit attribute (α NaN, D = 0),
+    which with a fit would be refused before anything is made."""
+    one = {"garments": ["skirt:0"], "bodies": ["regular"], "motions": ["walk:0"]}
+    with pytest.raises(ConfigError, match="needs more than 3 garment-body pairs in the train split, which has 1"):
+        micro(train=one, test={**one, "motions": ["wave:1"]}, split_disjoint=["motions"])
+    out = tmp_path / "motion.zarr"
+    assert not out.exists()
+    config = micro(train=one, test={**one, "motions": ["wave:1"]}, fit_attribute=False, split_disjoint=["motions"])
+    generate(config, out)
+    assert validate(out) == []
+    s = open_store(out)
+    assert s.attrs["fit_attribute"] is False and s.attrs["fit_diagnostics"] == {}
+    assert np.isnan(s.garment(0)["alpha"]).all() and s.fit_model()["components"].shape == (3, 0)
 
 
 def test_tensorstore_reads_every_array(local_store):
@@ -110,8 +136,8 @@ def test_finished_store_is_left_alone_and_other_config_refused(local_store):
 
 def test_kill_and_resume_gives_the_same_store(local_store, tmp_path):
     """Kill -9 the generator after its first staged sample, run it again: the same store. Scenes
-    are simulated one per batch here (so samples are staged one by one): the arrays also equal
-    the store simulated in one batch of five."""
+    are simulated one per batch here, in one process (so samples are staged one by one): the arrays
+    also equal the store simulated in one batch of five with worker processes staging (the default)."""
     import json
 
     one_by_one = {**MICRO, "simulation": {**MICRO["simulation"], "batch_size": 1}}
@@ -120,7 +146,7 @@ def test_kill_and_resume_gives_the_same_store(local_store, tmp_path):
     out = tmp_path / "killed.zarr"
     code = ("import json,sys; from datagen.config import load_config; from datagen.generate.config import "
             "DatasetConfig; from datagen.generate.run import generate; "
-            "generate(load_config(DatasetConfig, json.load(open(sys.argv[1]))), sys.argv[2])")
+            "generate(load_config(DatasetConfig, json.load(open(sys.argv[1]))), sys.argv[2], workers=0)")
     proc = subprocess.Popen([sys.executable, "-c", code, str(cfg), str(out)], env=dict(os.environ),
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     staged = out / "staging"

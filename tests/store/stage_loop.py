@@ -42,6 +42,10 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
             "parents": np.array([-1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21],
                                 np.int32),
             "faces": rng.integers(0, B, (20, 3)).astype(np.int32)}
+    tri = body["faces"]
+    edges = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+    body["subdivision_edges"] = edges.astype(np.int32)
+    body["subdivided_faces"] = rng.integers(0, B + len(edges), (80, 3)).astype(np.int32)
     n_bodies = 4
     bodies = {"betas": rng.normal(size=(n_bodies, S)).astype(f32)}
     M = 4
@@ -57,7 +61,7 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
         "uv": rng.random((nv, 2)).astype(f32),
         "region": rng.integers(0, len(REGION_NAMES), nv).astype(np.int32),
         "seam": (rng.random(nv) < 0.2).astype(np.uint8),
-        "indicator": rng.integers(0, 4 * B, nv).astype(np.int32),
+        "indicator": rng.integers(0, B + len(edges), nv).astype(np.int32),
         "skin_weights": rng.random((nv, J)).astype(f32),
         "type": np.arange(G, dtype=np.int32) % 2, "seed": np.arange(G, dtype=np.int32) + 7,
         "body": np.arange(G, dtype=np.int32), "material": np.zeros(G, np.int32),
@@ -82,7 +86,7 @@ def sample(i: int, garment_vertices=GARMENT_VERTICES, body_vertices=BODY_VERTICE
     splits); samples in :data:`FAILED` failed (no frames)."""
     rng = np.random.default_rng([SEED, i])
     split = i % 3
-    V, B, J = garment_vertices[split], body_vertices, 24
+    V, J = garment_vertices[split], 24
     failed = i in FAILED
     T = 0 if failed else (frames if frames is not None else 2 + i % 4)
     lead = 3
@@ -90,17 +94,12 @@ def sample(i: int, garment_vertices=GARMENT_VERTICES, body_vertices=BODY_VERTICE
     f32 = np.float32
     arrays: dict[str, np.ndarray] = {}
     if not failed:
-        for name in ("detail", "coarse", "anchor", "anchor_skin", "skin"):
+        for name in ("detail", "coarse"):
             arrays[name] = rng.normal(size=(T, V, 3)).astype(f32)
-        for name in ("anchor_normal", "coarse_normal"):
-            n = rng.normal(size=(T, V, 3))
-            arrays[name] = (n / np.linalg.norm(n, axis=-1, keepdims=True)).astype(f32)
-        arrays["joint_distance"] = rng.random((T, V, J)).astype(f32)
         arrays["pose"] = rng.normal(scale=0.3, size=(T, J, 3)).astype(f32)
         arrays["trans"] = rng.normal(size=(T, 3)).astype(f32)
         arrays["joints"] = rng.normal(size=(T, J, 3)).astype(f32)
         arrays["label"] = np.full(T, split, np.int32)
-        arrays["body_vertices"] = rng.normal(size=(T, B, 3)).astype(f32)
     arrays |= {"metric_stretch_max": rng.random(T_sim).astype(f32),
                "metric_stretch_mean": rng.random(T_sim).astype(f32),
                "metric_penetration_count": rng.integers(0, 5, T_sim).astype(np.int32),

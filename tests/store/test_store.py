@@ -19,9 +19,10 @@ import numpy as np
 import pytest
 
 from datagen.errors import InputError
+from datagen.geometry.positions import encode_positions
 from datagen.store import StorageError, format_store_info, open_store, store_info, validate
 from datagen.store.layout import MARKER, STAGING, TMP_PREFIX
-from schemas.dataset import ARRAYS, ROOT_ATTRIBUTES, TABLES, Chunking
+from schemas.dataset import ARRAYS, POSITION_QUANTUM, ROOT_ATTRIBUTES, TABLES, Chunking
 from tests.store import stage_loop as sl
 
 N = 12
@@ -64,6 +65,16 @@ def packed(tmp_path_factory) -> Path:
 # --------------------------------------------------------------------------------------- round trip
 
 
+def same(name: str, got: np.ndarray, value: np.ndarray) -> bool:
+    """Equal, or for quantised positions within the stated bound: half a step plus float32 rounding."""
+    if got.dtype != value.dtype or got.shape != value.shape:
+        return False
+    if name in ("detail", "coarse"):
+        bound = POSITION_QUANTUM / 2 + 2 * np.spacing(np.float32(np.abs(value).max(initial=0) + 10))
+        return bool(np.all(np.abs(got.astype(np.float64) - value) <= bound))
+    return np.array_equal(got, value)
+
+
 @pytest.mark.parametrize("backend", ["zarr", "tensorstore"])
 def test_round_trip_equals_inputs(packed, backend):
     store = open_store(packed, backend=backend)
@@ -72,7 +83,7 @@ def test_round_trip_equals_inputs(packed, backend):
         arrays, scalars = sl.sample(i)
         got = store.sample(i)
         for name, value in arrays.items():
-            assert got[name].dtype == value.dtype and np.array_equal(got[name], value), (i, name)
+            assert same(name, got[name], value), (i, name)
         for name, value in scalars.items():
             assert got[name] == np.asarray(value, dtype=ARRAYS[f"samples/{name}"].dtype), (i, name)
         if i in sl.FAILED:
@@ -80,9 +91,9 @@ def test_round_trip_equals_inputs(packed, backend):
             continue
         T = store.frame_count(i)
         part = store.frames(i, slice(1, T), names=["detail", "pose"])
-        assert np.array_equal(part["detail"], arrays["detail"][1:]) and np.array_equal(part["pose"], arrays["pose"][1:])
+        assert same("detail", part["detail"], arrays["detail"][1:]) and np.array_equal(part["pose"], arrays["pose"][1:])
         picked = store.frames(i, [T - 1, 0])
-        assert np.array_equal(picked["joint_distance"], arrays["joint_distance"][[T - 1, 0]])
+        assert same("coarse", picked["coarse"], arrays["coarse"][[T - 1, 0]])
         assert np.array_equal(store.frames(i, slice(None, None, 2))["label"], arrays["label"][::2])
     # segments: non-overlapping, every non-failed sample with T >= segment_length
     expected = [(i, t0) for i in range(N) if i not in sl.FAILED
@@ -92,7 +103,7 @@ def test_round_trip_equals_inputs(packed, backend):
         seg = store.segment(k)
         i, t0 = expected[k]
         assert seg["sample"] == i and seg["first_frame"] == t0
-        assert np.array_equal(seg["coarse"], sl.sample(i)[0]["coarse"][t0:t0 + sl.SEGMENT_LENGTH])
+        assert same("coarse", seg["coarse"], sl.sample(i)[0]["coarse"][t0:t0 + sl.SEGMENT_LENGTH])
     by_split = np.concatenate([store.split_segments(s) for s in ("train", "val", "test")])
     assert sorted(by_split) == list(range(len(expected)))
     # splits and iteration
@@ -145,8 +156,9 @@ def test_reader_pickles_and_reads_only_needed_chunks(tmp_path, monkeypatch):
     monkeypatch.setattr(LocalStore, "get", counting_get)
     arrays, _ = sl.sample(7)
     got = store.frames(7, slice(2, 3), names=["detail"])
-    assert np.array_equal(got["detail"], arrays["detail"][2:3])
-    assert reads and all(k.startswith("vertex_frames/detail/") for k, _ in reads)
+    assert same("detail", got["detail"], arrays["detail"][2:3])
+    # positions are decoded from their steps and the frame's root joint: those two arrays only
+    assert reads and all(k.startswith(("vertex_frames/detail/", "frames/joints/")) for k, _ in reads)
     assert all(r is not None for _, r in reads), "every read is a byte range inside a shard"
     shard_bytes = sum((path / k).stat().st_size for k in {k for k, _ in reads})
     fetched = sum(getattr(r, "length", None) or getattr(r, "suffix", 0) for _, r in reads)
@@ -187,12 +199,12 @@ def test_validate_passes_and_pinpoints_corruption(packed, tmp_path):
 
     def nan(root):
         store = open_store(packed, backend="zarr")
-        row = int(store.index["vertex_start"][4]) + 1 * V + 3  # sample 4, frame 1, vertex 3
-        root["vertex_frames/coarse"][row, 2] = np.nan
+        row = int(store.index["frame_start"][4]) + 1  # sample 4, frame 1
+        root["frames/joints"][row, 3, 2] = np.nan
 
     problems = corrupt("nan", nan)
-    assert len(problems) == 1 and "'vertex_frames/coarse' has 1 non-finite (NaN) value(s)" in problems[0]
-    assert "(first: sample 4, frame 1, vertex 3)" in problems[0], problems
+    assert len(problems) == 1 and "'frames/joints' has 1 non-finite (NaN) value(s)" in problems[0]
+    assert "(first: sample 4, frame 1)" in problems[0], problems
 
     def overlap(root):
         root["samples/split"][4] = 2  # sample 4 uses the val split's garment, body and motion
@@ -322,12 +334,12 @@ def test_stage_sample_rejects_what_the_schema_does_not_allow(tmp_path):
         return str(exc.value)
 
     ints = np.zeros((2, 7, 3), int)
-    assert "'detail' has dtype int64; the schema says float32" in refused({**arrays, "detail": ints})
+    assert "'detail' has dtype int64; give float positions in metres" in refused({**arrays, "detail": ints})
     assert "'coarse' has V = 6 (axis 1, size 6) but 'detail' gives V = 7" in refused(
         {**arrays, "coarse": arrays["coarse"][:, :6]})
-    nan = arrays["skin"].copy()
+    nan = arrays["detail"].copy()
     nan[1, 2, 0] = np.nan
-    assert "'skin' has 1 non-finite (NaN) value(s) at [(1, 2, 0)]" in refused({**arrays, "skin": nan})
+    assert "'detail' has 1 non-finite (NaN) value(s) at [(1, 2, 0)]" in refused({**arrays, "detail": nan})
     assert "missing array(s) ['trans']" in refused({k: v for k, v in arrays.items() if k != "trans"})
     assert "unknown array(s) ['colour']" in refused({**arrays, "colour": arrays["trans"]})
     assert "'split' has 1 value(s) above 2" in refused(scalars={**scalars, "split": 3})
@@ -428,6 +440,8 @@ def test_killed_staging_resumes_to_the_same_store(tmp_path):
             manifest = json.loads((staging / f"sample-{i:09d}" / MARKER).read_text())
             assert set(manifest["arrays"]) == set(arrays)
             for name, value in arrays.items():
+                if name in ("detail", "coarse"):  # staged as the store keeps them: steps from the root joint
+                    value = encode_positions(value, arrays["joints"][:, 0], POSITION_QUANTUM)
                 assert np.array_equal(np.load(staging / f"sample-{i:09d}" / f"{name}.npy"), value), (i, name)
     assert "killed" in outcomes, outcomes
     assert staged_counts == sorted(staged_counts)

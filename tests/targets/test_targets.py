@@ -378,3 +378,78 @@ def test_fitting_takes_the_training_pairs_only(tshirt):
     small_v, small_f = _grid(5)
     with pytest.raises(InputError, match="smaller subsample count"):
         fit_attribute(model, FitPair(vertices=small_v, faces=small_f, distances=np.zeros(len(small_v))))
+
+
+# ----------------------------------------------------------------------------- derived on read (schema 4)
+
+@pytest.fixture(scope="module")
+def store_body(default_body, subdivided_body):
+    """The body group exactly as drape generate stores it (float32, subdivision recipe)."""
+    from datagen.body.subdivide import subdivision_edges
+
+    m = default_body
+    f32 = np.float32
+    edges = subdivision_edges(m.faces)
+    return {"v_template": m.v_template.astype(f32), "shapedirs": m.shapedirs.astype(f32),
+            "J_regressor": np.asarray(m.J_regressor.todense() if hasattr(m.J_regressor, "todense") else m.J_regressor,
+                                      dtype=f32),
+            "weights": m.weights.astype(f32), "parents": np.asarray(m.parents, np.int32),
+            "faces": m.faces.astype(np.int32), "subdivision_edges": edges,
+            "subdivided_faces": subdivided_body.faces.astype(np.int32)}
+
+
+def test_subdivision_recipe_rebuilds_the_subdivided_body(default_body, subdivided_body, store_body, betas):
+    from datagen.geometry.features import body_shape, subdivided_rows
+
+    shape = body_shape(store_body, betas)
+    assert shape.subdivided_vertex_count == subdivided_body.vertex_count
+    rows = np.arange(0, subdivided_body.vertex_count, 7)
+    rest, weights = subdivided_rows(shape, rows)
+    np.testing.assert_allclose(rest, subdivided_body.shaped(betas[None])[0][rows], atol=2e-6)
+    np.testing.assert_allclose(weights, subdivided_body.weights[rows], atol=1e-6)
+
+
+def test_derived_features_equal_the_paper_definitions(tshirt, subdivided_body, default_body, store_body, betas,
+                                                      correspondence, short_sample):
+    """Every array the schema-3 store kept and schema 4 derives, against sample_targets (paper 000 §4)."""
+    import torch
+
+    from datagen.geometry.features import bind_garment, body_shape, derive
+    from datagen.targets import stored_targets
+    from schemas.dataset import DERIVED
+
+    poses, trans, detail, out = short_sample
+    kept = stored_targets(tshirt.faces, subdivided_body, betas, poses, trans, detail)
+    for name in ("coarse", "joints"):
+        np.testing.assert_array_equal(kept[name], out[name])
+    binding = bind_garment(body_shape(store_body, betas), tshirt.vertices, tshirt.faces, correspondence["indicator"])
+    names = list(DERIVED)
+    got = derive(binding, names, pose=poses, trans=trans, coarse=out["coarse"], joints=out["joints"])
+    for name in names:
+        if name == "body_vertices":
+            ref, _ = default_body.pose(betas[None], poses, trans)
+            np.testing.assert_allclose(got[name], ref, atol=2e-5, err_msg=name)
+        else:
+            assert got[name].shape == out[name].shape and got[name].dtype == np.float32, name
+            np.testing.assert_allclose(got[name], out[name], atol=2e-5, err_msg=name)
+    # the same function on torch tensors (float32, the trainers' path) agrees
+    t = lambda a: torch.as_tensor(np.asarray(a), dtype=torch.float32)  # noqa: E731
+    got_t = derive(binding, names, pose=t(poses), trans=t(trans), coarse=t(out["coarse"]), joints=t(out["joints"]))
+    for name in names:
+        assert isinstance(got_t[name], torch.Tensor) and got_t[name].dtype == torch.float32
+        np.testing.assert_allclose(got_t[name].numpy(), got[name], atol=5e-5, err_msg=name)
+    with pytest.raises(InputError, match="needs \\['coarse'\\]"):
+        derive(binding, ["coarse_normal"], pose=poses)
+
+
+def test_positions_round_trip_within_the_stated_bound():
+    from datagen.geometry.positions import decode_positions, encode_positions
+    from schemas.dataset import POSITION_QUANTUM
+
+    rng = np.random.default_rng(0)
+    x = rng.normal(scale=0.6, size=(4, 500, 3)).astype(np.float32)
+    root = rng.normal(size=(4, 3)).astype(np.float32)
+    steps = encode_positions(x, root, POSITION_QUANTUM)
+    assert steps.dtype == np.int32
+    err = np.abs(decode_positions(steps, root, POSITION_QUANTUM).astype(np.float64) - x).max()
+    assert POSITION_QUANTUM / 2 * 0.9 < err <= POSITION_QUANTUM / 2 + 4e-7, err

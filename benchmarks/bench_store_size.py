@@ -1,0 +1,100 @@
+"""Bytes per stored garment-frame of a dataset store, per array, against what schema 3 stored.
+
+After: each array's bytes on disk (its directory) over the store's recorded garment-frames.
+Before: the arrays schema 3 kept per frame (float32 positions, the derived features, the posed
+body) made again from this store for up to ``--samples`` samples (the derived ones through the
+reader, the same function as on read) and compressed as schema 3 did (blosc lz4 + bit-shuffle,
+256 KiB chunks), per garment-frame. Per-vertex and per-frame parts are also scaled to a
+``--vertices``-vertex garment (the issue's figure is for ~4,000).
+
+    python benchmarks/bench_store_size.py STORE [--samples 8] [--vertices 4000]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from datagen.store import open_store  # noqa: E402
+from datagen.store.layout import directory_bytes  # noqa: E402
+from schemas.dataset import ARRAYS  # noqa: E402
+
+V3_PER_VERTEX = ("detail", "coarse", "anchor", "anchor_normal", "anchor_skin", "coarse_normal", "skin",
+                 "joint_distance")
+V3_PER_FRAME = ("pose", "trans", "joints", "label", "body_vertices")
+CHUNK = 256 * 1024
+
+
+def compressed(a: np.ndarray) -> int:
+    from numcodecs import Blosc
+
+    codec = Blosc(cname="lz4", clevel=5, shuffle=Blosc.BITSHUFFLE)
+    raw = np.ascontiguousarray(a).reshape(len(a), -1)
+    rows = max(1, CHUNK // max(1, raw[0].nbytes))
+    return sum(len(codec.encode(raw[k:k + rows])) for k in range(0, len(raw), rows))
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("store", type=Path)
+    ap.add_argument("--samples", type=int, default=8, help="samples to rebuild schema 3's arrays from")
+    ap.add_argument("--vertices", type=int, default=4000, help="garment size to scale the figures to")
+    args = ap.parse_args()
+    s = open_store(args.store, backend="zarr")
+    idx = s.index
+    T = np.diff(idx["frame_start"])
+    frames = int(T.sum())
+    vrows = int((T * idx["vertex_count"]).sum())
+    mean_v = vrows / max(frames, 1)
+    print(f"store {args.store}: {frames} garment-frames, {mean_v:.0f} garment vertices on average")
+    print(f"\nafter (schema {s.attrs['schema_version']}, on disk)")
+    print(f"{'array':<28}{'B/garment-frame':>16}{'B/vertex':>10}{f'at V={args.vertices}':>12}")
+    after_total, after_scaled = 0.0, 0.0
+    for path, spec in ARRAYS.items():
+        if spec.table not in ("vertex_frame", "frame"):
+            continue
+        b = directory_bytes(args.store / path) / max(frames, 1)
+        scaled = b / mean_v * args.vertices if spec.table == "vertex_frame" else b
+        after_total += b
+        after_scaled += scaled
+        per_v = f"{b / mean_v:.2f}" if spec.table == "vertex_frame" else "-"
+        print(f"{path:<28}{b:>16.0f}{per_v:>10}{scaled:>12.0f}")
+    print(f"{'total':<28}{after_total:>16.0f}{'':>10}{after_scaled:>12.0f}")
+
+    ok = [i for i in range(s.sample_count) if s.frame_count(i)][: args.samples]
+    sizes = {n: 0 for n in V3_PER_VERTEX + V3_PER_FRAME}
+    n_frames, n_rows = 0, 0
+    for i in ok:
+        x = s.sample(i, names=list(V3_PER_VERTEX + V3_PER_FRAME))
+        Ti, Vi = x["detail"].shape[:2]
+        n_frames += Ti
+        n_rows += Ti * Vi
+        for n in sizes:
+            a = x[n]
+            sizes[n] += compressed(a.reshape(Ti * Vi, -1) if n in V3_PER_VERTEX else a)
+    mean_v3 = n_rows / max(n_frames, 1)
+    print(f"\nbefore (schema 3's arrays rebuilt from {len(ok)} samples, {n_frames} garment-frames, "
+          f"{mean_v3:.0f} vertices on average; lz4 + bit-shuffle as schema 3 stored them)")
+    print(f"{'array':<28}{'B/garment-frame':>16}{'B/vertex':>10}{f'at V={args.vertices}':>12}")
+    before_total, before_scaled = 0.0, 0.0
+    for n, total in sizes.items():
+        b = total / max(n_frames, 1)
+        scaled = b / mean_v3 * args.vertices if n in V3_PER_VERTEX else b
+        before_total += b
+        before_scaled += scaled
+        per_v = f"{b / mean_v3:.2f}" if n in V3_PER_VERTEX else "-"
+        group = "vertex_frames" if n in V3_PER_VERTEX else "frames"
+        print(f"{group + '/' + n:<28}{b:>16.0f}{per_v:>10}{scaled:>12.0f}")
+    print(f"{'total':<28}{before_total:>16.0f}{'':>10}{before_scaled:>12.0f}")
+    print(f"\nper garment-frame: {before_total / 1024:.1f} KiB -> {after_total / 1024:.1f} KiB "
+          f"({before_total / max(after_total, 1):.1f}x smaller); at {args.vertices} vertices "
+          f"{before_scaled / 1024:.1f} KiB -> {after_scaled / 1024:.1f} KiB")
+
+
+if __name__ == "__main__":
+    main()
