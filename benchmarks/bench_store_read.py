@@ -224,8 +224,7 @@ def run(args) -> None:
           f"{info['totals']['frames']} frames, {info['totals']['segments']} segments; "
           f"{raw / MB:.0f} MB uncompressed, {directory_bytes(args.store) / MB:.0f} MB on disk")
     reference = open_store(args.store, backend="zarr")
-    paths = [p for p, a in ARRAYS.items() if a.written_by in ("stage_sample", "pack")] + \
-            ["garments/vertex_start", "garments/face_start"]
+    paths = list(ARRAYS)  # per-sample and static arrays alike
     t0 = time.perf_counter()
     memory = {p: reference.read(p) for p in paths}
     print(f"loaded the per-sample arrays into memory for the reference in {time.perf_counter() - t0:.1f} s "

@@ -7,7 +7,12 @@ reader, the same function as on read) and compressed as schema 3 did (blosc lz4 
 256 KiB chunks), per garment-frame. Per-vertex and per-frame parts are also scaled to a
 ``--vertices``-vertex garment (the issue's figure is for ~4,000).
 
-    python benchmarks/bench_store_size.py STORE [--samples 8] [--vertices 4000]
+    python benchmarks/bench_store_size.py STORE [--samples 8] [--vertices 4000] [--codecs]
+
+``--codecs`` also compresses ``detail`` of the first samples in the candidate encodings (float32
+metres; int16/int32 steps of the quantum from the anchor or from the root joint) with the
+candidate blosc codecs, and prints bytes per vertex-component and decode speed: the measurement
+behind ``schemas.dataset.POSITION_COMPRESSION``.
 """
 
 from __future__ import annotations
@@ -39,11 +44,48 @@ def compressed(a: np.ndarray) -> int:
     return sum(len(codec.encode(raw[k:k + rows])) for k in range(0, len(raw), rows))
 
 
+def codec_table(s, samples: list[int]) -> None:
+    import time
+
+    from numcodecs import Blosc
+
+    from schemas.dataset import POSITION_QUANTUM as q
+
+    codecs = [("lz4", Blosc.BITSHUFFLE), ("zstd", Blosc.SHUFFLE), ("zstd", Blosc.BITSHUFFLE)]
+    print(f"\ndetail, bytes per vertex-component after compression (decode GB/s); {len(samples)} samples")
+    print(f"{'encoding':<34}" + "".join(f"{c + ('+bitshuffle' if sh == Blosc.BITSHUFFLE else '+shuffle'):>26}"
+                                         for c, sh in codecs))
+    x = [s.sample(i, names=["detail", "anchor", "joints"]) for i in samples]
+    encodings = {
+        "float32 metres": lambda d: d["detail"],
+        "int16 steps from the anchor": lambda d: np.rint((d["detail"] - d["anchor"]) / q).astype(np.int16),
+        "int16 steps from the root joint": lambda d: np.rint((d["detail"] - d["joints"][:, None, 0]) / q).astype(
+            np.int16),
+        "int32 steps from the root joint": lambda d: np.rint((d["detail"] - d["joints"][:, None, 0]) / q).astype(
+            np.int32),
+    }
+    for name, enc in encodings.items():
+        row = f"{name:<34}"
+        for cname, shuffle in codecs:
+            codec = Blosc(cname=cname, clevel=5, shuffle=shuffle)
+            nbytes, comps, dec, raw = 0, 0, 0.0, 0
+            for d in x:
+                a = np.ascontiguousarray(enc(d)).reshape(-1, 3)
+                e = codec.encode(a)
+                nbytes, comps, raw = nbytes + len(e), comps + a.size, raw + a.nbytes
+                t = time.perf_counter()
+                codec.decode(e)
+                dec += time.perf_counter() - t
+            row += f"{nbytes / comps:>14.2f} B ({raw / dec / 1e9:>4.1f} GB/s)"
+        print(row)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("store", type=Path)
     ap.add_argument("--samples", type=int, default=8, help="samples to rebuild schema 3's arrays from")
     ap.add_argument("--vertices", type=int, default=4000, help="garment size to scale the figures to")
+    ap.add_argument("--codecs", action="store_true", help="also compare position encodings and codecs")
     args = ap.parse_args()
     s = open_store(args.store, backend="zarr")
     idx = s.index
@@ -94,6 +136,8 @@ def main() -> None:
     print(f"\nper garment-frame: {before_total / 1024:.1f} KiB -> {after_total / 1024:.1f} KiB "
           f"({before_total / max(after_total, 1):.1f}x smaller); at {args.vertices} vertices "
           f"{before_scaled / 1024:.1f} KiB -> {after_scaled / 1024:.1f} KiB")
+    if args.codecs:
+        codec_table(s, ok[:3])
 
 
 if __name__ == "__main__":

@@ -5,6 +5,9 @@ from __future__ import annotations
 import json
 import sys
 import time
+from pathlib import Path
+
+from datagen.errors import InputError
 
 
 def register(sub, formatter) -> None:
@@ -39,6 +42,9 @@ def register(sub, formatter) -> None:
                        "  drape info tiny.zarr --plots plots/   (splits, vertex_counts, failures, alpha, betas .png)")
     p.add_argument("store")
     p.add_argument("--json", action="store_true")
+    p.add_argument("--config", action="store_true",
+                   help="print only the config the store was made with (JSON, which is YAML: save it as .yaml and "
+                        "give it to drape generate to make the store again)")
     p.add_argument("--plots", default=None, metavar="DIR", help="also write PNG plots into this directory")
     p.set_defaults(func=_cmd_info)
 
@@ -111,6 +117,14 @@ def _cmd_validate(args) -> int:
 def _cmd_info(args) -> int:
     from datagen.store import format_store_info, store_info
 
+    if args.config:
+        from datagen.store.layout import read_root_attributes
+
+        attrs = read_root_attributes(Path(args.store))
+        if not attrs or "config" not in attrs:
+            raise InputError(f"{args.store} is not a drape dataset store (no config in its zarr.json)")
+        print(json.dumps(attrs["config"], indent=2))
+        return 0
     info = store_info(args.store)
     print(json.dumps(info, indent=2, default=str) if args.json else format_store_info(info))
     if args.plots is not None:

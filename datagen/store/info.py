@@ -45,7 +45,11 @@ def store_info(path: str | Path) -> dict[str, Any]:
     if not info["complete"]:
         return info | _staging_info(path, attrs, failure_names)
 
-    from datagen.store.reader import open_store
+    from datagen.store.reader import open_store, version_problem
+
+    outdated = version_problem(path, attrs.get("schema_version"))
+    if outdated:
+        return info | {"outdated": outdated}
 
     store = open_store(path, backend="zarr")
     idx = store.index
@@ -156,6 +160,8 @@ def format_store_info(info: dict[str, Any]) -> str:
              (f"schema {info['schema_version']}, drape {info['drape_version']} (code {info['code_version'] or 'not recorded'}), "
               f"seed {info['seed']}, "
               f"{info['sample_count']} samples, segments of {info['segment_length']} frames")]
+    if info.get("outdated"):
+        return "\n".join([*lines, info["outdated"]])
     if not info["complete"]:
         lines.append(f"staged {info['staged']} samples, missing {info['missing']}; static groups staged: "
                      f"{', '.join(info['static_staged']) or 'none'}; {_bytes(info['size_on_disk'])} on disk")

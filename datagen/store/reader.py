@@ -57,8 +57,8 @@ def version_problem(path, version) -> str | None:
         return None
     why = REFUSED_VERSIONS.get(version, "it is not a version this drape knows")
     return (f"store {path} has schema version {version}; this drape reads version {DATASET_SCHEMA_VERSION} "
-            f"({why}). Make the store again: `drape generate --config CONFIG --out NEW` with the config it was made "
-            "with (`drape info` prints it; a store is a pure function of its config and seed)")
+            f"({why}). Make it again from the config it was made with (a store is a pure function of its config and "
+            f"seed): `drape info {path} --config > config.yaml && drape generate config.yaml --out NEW`")
 
 TENSORSTORE_CACHE_BYTES = 64 * 1024 * 1024
 """Tensorstore's chunk and shard-index cache per open store (decoded chunks read again are free)."""

@@ -168,9 +168,10 @@ def validate(path: str | Path, *, check_values: bool = True) -> list[str]:
     if attrs.get("complete") is not True:
         problems.append("store is not marked complete (root attribute 'complete' is not true): pack() has not "
                         "finished; run the writer's pack() again")
-    if attrs.get("schema_version") != DATASET_SCHEMA_VERSION:
-        problems.append(f"root attribute 'schema_version' is {attrs.get('schema_version')!r}; this drape reads "
-                        f"version {DATASET_SCHEMA_VERSION}")
+    if attrs.get("schema_version") != DATASET_SCHEMA_VERSION:  # another layout: its arrays mean other things
+        from datagen.store.reader import version_problem
+
+        return [*problems, version_problem(path, attrs.get("schema_version"))]
     problems += _root_attribute_problems(attrs)
     if "consolidated_metadata" not in meta:
         problems.append("root zarr.json has no consolidated metadata (pack() writes it before marking the store "

@@ -234,6 +234,28 @@ def test_validate_passes_and_pinpoints_corruption(packed, tmp_path):
     assert any(p.startswith("array 'fit/mean' is missing") for p in problems), problems
 
 
+def test_an_older_schema_is_refused_with_how_to_make_it_again(packed, tmp_path):
+    """A schema-3 store (float positions and derived arrays stored) is refused by the reader, validate
+    and info, each saying why and the command that makes it again; the config is still printable."""
+    import zarr
+
+    old = tmp_path / "v3"
+    shutil.copytree(packed, old)
+    meta = json.loads((old / "zarr.json").read_text())
+    meta["attributes"]["schema_version"] = 3
+    (old / "zarr.json").write_text(json.dumps(meta))
+    with pytest.raises(InputError) as exc:
+        open_store(old)
+    message = str(exc.value)
+    assert "has schema version 3; this drape reads version 4" in message and "derives on read" in message
+    assert f"drape info {old} --config > config.yaml && drape generate config.yaml --out NEW" in message
+    assert validate(old) == [message]
+    info = store_info(old)
+    assert info["outdated"] == message and "splits" not in info
+    assert message in format_store_info(info)
+    assert zarr.open_group(str(old), mode="r").attrs["config"] == sl.CONFIG
+
+
 def test_tensorstore_reads_every_array(packed):
     ts = pytest.importorskip("tensorstore")
     expected = read_everything(packed)
@@ -559,9 +581,10 @@ def test_reading_a_store_loads_the_reader_alone():
     import sys
 
     code = ("import sys; from datagen.store import open_store, DatasetStore; "
-            "print(sorted(m for m in sys.modules if m.startswith('datagen') or m == 'fcntl'))")
+            "print(sorted(m for m in sys.modules if m.startswith('datagen') or m in ('fcntl', 'torch')))")
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert "datagen.store.reader" in loaded
-    for heavy in ("datagen.store.writer", "datagen.store.validate", "datagen.store.info", "'fcntl'", "datagen.sim",
+    for heavy in ("datagen.store.writer", "datagen.store.validate", "datagen.store.info", "'fcntl'", "'torch'",
+                  "datagen.geometry.features", "datagen.sim",
                   "datagen.garment", "datagen.body"):
         assert heavy not in loaded, (heavy, loaded)
