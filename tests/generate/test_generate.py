@@ -213,3 +213,5 @@ def test_config_errors_say_what_is_wrong():
     assert set(PRESETS) == {"tiny", "small", "paper-gnn", "paper-motion"}
     for name in PRESETS:
         resolve_config(preset=name)
+    # paper 001 never uses α: its preset fits none (with one body per split it could not)
+    assert resolve_config(preset="paper-motion").fit_attribute is False
