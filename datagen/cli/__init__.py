@@ -38,6 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     from datagen.cli import generate as generate_cli
     from datagen.cli import motion as motion_cli
     from datagen.cli import simulate as sim_cli
+    from datagen.cli import train as train_cli
 
     body_cli.register(sub, _Formatter)
     motion_cli.register(sub, _Formatter)
@@ -45,6 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim_cli.register(sub, _Formatter)
     generate_cli.register(sub, _Formatter)
     export_cli.register(sub, _Formatter)
+    train_cli.register(sub, _Formatter)
     return parser
 
 

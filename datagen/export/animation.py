@@ -88,7 +88,8 @@ class Animation:
         return replace(self, body_vertices=self.body_vertices[index], garment_vertices=self.garment_vertices[index],
                        skeleton=sk, frame_numbers=self.source_frames[index])
 
-    def write_usd(self, path: str | os.PathLike, *, skeleton: bool = False, normals: bool = True) -> Path:
+    def write_usd(self, path: str | os.PathLike, *, skeleton: bool = False, normals: bool = True,
+                  garment_colors: np.ndarray | None = None, garment_values: tuple | None = None) -> Path:
         """:func:`~datagen.export.usd.write_animation_usd` of these arrays."""
         from datagen.export.usd import write_animation_usd
 
@@ -97,7 +98,7 @@ class Animation:
         return write_animation_usd(path, self.body_vertices, self.body_faces, self.garment_vertices,
                                    self.garment_faces, self.fps, region=self.region, region_names=self.region_names,
                                    skeleton=self.skeleton if skeleton else None, metadata=self.metadata,
-                                   normals=normals)
+                                   normals=normals, garment_colors=garment_colors, garment_values=garment_values)
 
 
 # ------------------------------------------------------------------------------------- stores

@@ -294,7 +294,8 @@ def write_animation_usd(path: str | os.PathLike, body_vertices: np.ndarray, body
                         garment_vertices: np.ndarray, garment_faces: np.ndarray, fps: float, *,
                         region: np.ndarray | None = None, region_names: Sequence[str] | None = None,
                         skeleton: SkeletonAnimation | None = None, metadata: Mapping[str, Any] | None = None,
-                        normals: bool = True) -> Path:
+                        normals: bool = True, garment_colors: np.ndarray | None = None,
+                        garment_values: tuple[str, np.ndarray] | None = None) -> Path:
     """Write a body and a garment moving together as one USD layer (see the module docstring).
 
     Args:
@@ -311,6 +312,10 @@ def write_animation_usd(path: str | os.PathLike, body_vertices: np.ndarray, body
         metadata: JSON-like values (str, int, float, bool, lists of them) for the root prim's
             ``customData["drape"]``.
         normals: write time-sampled vertex normals.
+        garment_colors: time-sampled per-vertex RGB [T, V, 3] in 0..1 for the garment's
+            ``displayColor`` (e.g. a prediction coloured by its error); replaces the region colours.
+        garment_values: (name, [T, V] floats): a time-sampled per-vertex primvar ``drape:<name>``
+            (e.g. ``error_mm``), so the values behind the colours travel with the file.
 
     Returns:
         The path written.
@@ -345,9 +350,26 @@ def write_animation_usd(path: str | os.PathLike, body_vertices: np.ndarray, body
     for key, value in (metadata or {}).items():
         root.GetPrim().SetCustomDataByKey(f"drape:{key}", _custom_value(value))
 
+    if garment_colors is not None:
+        garment_colors = np.asarray(garment_colors, np.float32)
+        if garment_colors.shape != (T, V, 3):
+            raise InputError(f"garment_colors must be [T={T}, V={V}, 3], got {garment_colors.shape}")
     garment = define_mesh(stage, f"{ROOT}/Garment", gf, double_sided=True,
-                          color=GARMENT_COLOR if region is None else
+                          color=None if garment_colors is not None else GARMENT_COLOR if region is None else
                           np.asarray(REGION_COLORS, np.float32)[region % len(REGION_COLORS)])
+    if garment_colors is not None:
+        colour = UsdGeom.PrimvarsAPI(garment).CreatePrimvar("displayColor", Sdf.ValueTypeNames.Color3fArray,
+                                                            UsdGeom.Tokens.vertex)
+        for k in range(T):
+            colour.Set(Vt.Vec3fArray.FromNumpy(np.ascontiguousarray(garment_colors[k])), Usd.TimeCode(k))
+    if garment_values is not None:
+        name, values = garment_values[0], np.asarray(garment_values[1], np.float32)
+        if values.shape != (T, V):
+            raise InputError(f"garment_values must be [T={T}, V={V}], got {values.shape}")
+        pv = UsdGeom.PrimvarsAPI(garment).CreatePrimvar(f"drape:{name}", Sdf.ValueTypeNames.FloatArray,
+                                                        UsdGeom.Tokens.vertex)
+        for k in range(T):
+            pv.Set(Vt.FloatArray.FromNumpy(np.ascontiguousarray(values[k])), Usd.TimeCode(k))
     if region is not None:
         pv = UsdGeom.PrimvarsAPI(garment).CreatePrimvar("drape:region", Sdf.ValueTypeNames.IntArray,
                                                         UsdGeom.Tokens.vertex)

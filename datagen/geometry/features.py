@@ -54,6 +54,7 @@ __all__ = [
     "bind_garment",
     "body_shape",
     "derive",
+    "joint_distances",
     "subdivided_rows",
     "vertex_normals",
 ]
@@ -217,6 +218,11 @@ def vertex_normals(vertices: torch.Tensor, faces: torch.Tensor) -> torch.Tensor:
     return _unit(_face_normal_sums(vertices, faces, vertices.shape[1]))
 
 
+def joint_distances(points: torch.Tensor, joints: torch.Tensor) -> torch.Tensor:
+    """Distances [..., V, J] from points [..., V, 3] to joints [..., J, 3] (x_i of paper 000 §4.4)."""
+    return torch.linalg.vector_norm(points[..., :, None, :] - joints[..., None, :, :], dim=-1)
+
+
 def _apply(blended: torch.Tensor, points: torch.Tensor) -> torch.Tensor:
     return (blended[..., 0] * points[..., 0:1] + blended[..., 1] * points[..., 1:2]
             + blended[..., 2] * points[..., 2:3] + blended[..., 3])
@@ -294,7 +300,7 @@ def derive(binding: GarmentBinding, names: Sequence[str], *, pose=None, trans=No
         if "coarse_normal" in names:
             out["coarse_normal"] = vertex_normals(coarse, g["faces"])
         if "joint_distance" in names:
-            out["joint_distance"] = torch.cdist(coarse, joints, compute_mode="donot_use_mm_for_euclid_dist")
+            out["joint_distance"] = joint_distances(coarse, joints)
     out = {n: out[n] for n in names}
     if numpy_out:
         return {n: v.numpy().astype(np.float32) for n, v in out.items()}

@@ -1,0 +1,105 @@
+"""``drape train``, ``drape evaluate`` and ``drape predict``: paper 000's GNN from a dataset store."""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+
+def register(sub, formatter) -> None:
+    p = sub.add_parser("train", formatter_class=formatter, help="train a model on a dataset store",
+                       description="Train one of drape's models on a store's train split, choosing the checkpoint "
+                       "on its val split. A run directory keeps the config, checkpoints (resume with --resume "
+                       "after a kill), TensorBoard and CSV logs.",
+                       epilog="examples:\n  drape train gnn --data small.zarr --out runs/gnn --device cuda\n"
+                       "  drape train gnn --data small.zarr --out runs/no-parser --ablation no_parser\n"
+                       "  torchrun --nproc-per-node 2 -m datagen.cli train gnn --data small.zarr --out runs/ddp")
+    models = p.add_subparsers(dest="model", metavar="MODEL", required=True)
+    g = models.add_parser("gnn", formatter_class=formatter, help="paper 000's detail-aware GNN")
+    g.add_argument("--data", required=True, help="the dataset store")
+    g.add_argument("--out", required=True, help="the run directory")
+    g.add_argument("--config", default=None, help="training config (.toml/.yaml; fields of training.config.TrainConfig)")
+    g.add_argument("--ablation", default=None, help="a variant of paper 000 §5.3 (overrides the config)")
+    g.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
+    g.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    g.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    g.add_argument("--force", action="store_true", help="replace the run in --out")
+    g.set_defaults(func=_cmd_train_gnn)
+
+    p = sub.add_parser("evaluate", formatter_class=formatter, help="a trained model's errors on a split",
+                       description="Paper 000's Tables 1 and 2 on a split: mean per-vertex error (mm) of the "
+                       "coarse and detailed predictions per body and overall, beside trivial baselines, and the "
+                       "share of predicted vertices inside the body.")
+    p.add_argument("run", help="a run directory of `drape train`")
+    p.add_argument("--data", default=None, help="the store (default: the one it trained on)")
+    p.add_argument("--split", default="test", choices=("train", "val", "test"))
+    p.add_argument("--max-frames", type=int, default=None, help="evaluate this many frames, drawn evenly")
+    p.add_argument("--device", default="auto")
+    p.add_argument("--json", default=None, metavar="FILE", help="also write the figures as JSON")
+    p.set_defaults(func=_cmd_evaluate)
+
+    p = sub.add_parser("predict", formatter_class=formatter, help="predict a sample's garment with a trained model",
+                       description="Predict every frame of a store sample and write it as USD (the body and the "
+                       "predicted garment coloured by its per-vertex error, 0 to --max-error mm) and as an .npz "
+                       "for `drape preview STORE --sample ID --prediction PRED.npz --color-by error`.")
+    p.add_argument("run")
+    p.add_argument("--data", required=True)
+    p.add_argument("--sample", type=int, required=True)
+    p.add_argument("--out", required=True, help="a .usd/.usda/.usdc file (the .npz goes beside it)")
+    p.add_argument("--max-error", type=float, default=30.0, help="error (mm) shown as the hottest colour")
+    p.set_defaults(func=_cmd_predict)
+
+
+def _cmd_train_gnn(args) -> int:
+    from datagen.config import load_config
+    from training.config import TrainConfig
+    from training.gnn.run import train_gnn
+
+    data = load_config(TrainConfig, args.config).as_dict() if args.config else TrainConfig().as_dict()
+    if args.ablation is not None:
+        data["ablation"] = args.ablation
+    if args.epochs is not None:
+        data["epochs"] = args.epochs
+    config = load_config(TrainConfig, data)
+    result = train_gnn(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
+    print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_frames']} frames; best "
+          f"validation detail error {result['best']:.2f} mm ({result['best_checkpoint']})")
+    return 0
+
+
+def _cmd_evaluate(args) -> int:
+    from training.gnn.run import evaluate_gnn, format_evaluation
+
+    e = evaluate_gnn(args.run, data=args.data, split=args.split, max_frames=args.max_frames, device=args.device)
+    print(format_evaluation(e))
+    if args.json:
+        Path(args.json).write_text(json.dumps(e, indent=2))
+        print(f"wrote {args.json}", file=sys.stderr)
+    return 0
+
+
+def _cmd_predict(args) -> int:
+    from dataclasses import replace
+
+    import numpy as np
+
+    from datagen.export.animation import from_store
+    from datagen.store import open_store
+    from training.gnn.run import predict_sample
+
+    p = predict_sample(args.run, args.data, args.sample)
+    anim = from_store(open_store(args.data), args.sample)
+    out = Path(args.out)
+    error_mm = 1000 * p["error"]
+    t = np.clip(error_mm / args.max_error, 0, 1)[..., None]
+    colours = (1 - t) * np.array([0.20, 0.35, 0.85]) + t * np.array([0.90, 0.15, 0.10])  # blue (0) to red (max)
+    pred = replace(anim, garment_vertices=p["detail"].astype(np.float32))
+    pred.write_usd(out, garment_colors=colours, garment_values=("error_mm", error_mm))
+    npz = out.with_suffix(".npz")
+    np.savez(npz, garment_vertices=p["detail"].astype(np.float32), coarse=p["coarse"].astype(np.float32),
+             error_mm=error_mm.astype(np.float32))
+    print(f"wrote {out} and {npz}: sample {args.sample}, {len(error_mm)} frames, mean error {error_mm.mean():.2f} mm "
+          f"(max {error_mm.max():.1f}); preview: drape preview {args.data} --sample {args.sample} --prediction {npz} "
+          "--color-by error")
+    return 0

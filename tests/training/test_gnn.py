@@ -1,0 +1,162 @@
+"""Paper 000's GNN end to end on a micro store: the loss falls, evaluate and predict work, a killed run
+resumes, DDP on two CPU processes follows the one-process curve, and bad input gets one clear line.
+Marked slow: a few short trainings on 2 CPU cores."""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import torch
+
+from datagen.errors import ConfigError, InputError
+from training.config import TrainConfig
+from training.gnn.model import ABLATIONS, DetailAwareGNN
+
+pytestmark = pytest.mark.slow
+
+QUICK = {"epochs": 4, "batch_size": 4, "workers": 0, "max_train_frames": 16, "max_val_frames": 6, "lr": 1e-3}
+
+
+def epoch_losses(run: Path, key: str = "train/loss_epoch") -> list[float]:
+    from training.loop import read_metrics
+
+    return list(read_metrics(run, key).values())
+
+
+@pytest.fixture(scope="module")
+def trained(train_store, tmp_path_factory):
+    from training.gnn.run import train_gnn
+
+    run = tmp_path_factory.mktemp("runs") / "gnn"
+    result = train_gnn(train_store, run, TrainConfig(**QUICK), device="cpu")
+    return run, result
+
+
+def test_every_ablation_builds_and_predicts_three_vectors():
+    n = 40
+    edges = torch.randint(0, n, (2, 160))
+    batch = torch.zeros(n, dtype=torch.long)
+    for ablation in ABLATIONS:
+        m = DetailAwareGNN(ablation=ablation)
+        if m.coarse is not None:
+            assert m.forward_coarse(torch.randn(n, 7), edges, batch).shape == (n, 3)
+            x = torch.randn(n, 30)
+        else:
+            x = torch.randn(n, 7)
+        out = m.forward_detail(x, edges, batch, torch.randn(1, 85))
+        assert out.shape == (n, 3) and torch.isfinite(out).all(), ablation
+
+
+def test_training_loss_falls_and_checkpoints_are_written(trained):
+    run, result = trained
+    losses = epoch_losses(run)
+    print(f"\ntrain loss per epoch: {[round(x, 4) for x in losses]}; best val detail {result['best']:.2f} mm")
+    assert len(losses) == QUICK["epochs"] and losses[-1] < losses[0]
+    assert (run / "checkpoints" / "last.ckpt").is_file() and (run / "checkpoints" / "best.ckpt").is_file()
+    assert list((run / "logs" / "tensorboard").glob("events.out.tfevents.*"))
+    meta = json.loads((run / "run.json").read_text())
+    assert meta["kind"] == "gnn" and meta["config"]["epochs"] == QUICK["epochs"]
+
+
+def test_evaluate_and_predict_end_to_end(trained, train_store, tmp_path):
+    from datagen.cli import main
+    from datagen.store import open_store
+    from training.gnn.run import evaluate_gnn
+
+    run, _ = trained
+    e = evaluate_gnn(run, split="test", device="cpu")
+    assert set(e["table"]) == {"fat", "all"} and e["frames"] == 6
+    for key in ("coarse", "detail", "zero_coarse", "zero_detail", "skinned_detail"):
+        assert np.isfinite(e["table"]["all"][key]) and e["table"]["all"][key] > 0
+    assert 0 <= e["inside_body_share"] <= 1 and e["model_ms_per_frame"] > 0
+    store = open_store(train_store)
+    sample = int(store.split("test", include_failed=False)[0])
+    out = tmp_path / "pred.usda"
+    assert main(["predict", str(run), "--data", str(train_store), "--sample", str(sample), "--out", str(out)]) == 0
+    pred = np.load(out.with_suffix(".npz"))
+    assert pred["garment_vertices"].shape == store.frames(sample, names=["detail"])["detail"].shape
+    text = out.read_text()
+    assert "primvars:displayColor" in text and "primvars:drape:error_mm" in text
+    assert main(["evaluate", str(run), "--split", "val", "--device", "cpu", "--json", str(tmp_path / "e.json")]) == 0
+    assert json.loads((tmp_path / "e.json").read_text())["split"] == "val"
+
+
+def test_a_killed_run_resumes_from_its_last_checkpoint(train_store, tmp_path):
+    run = tmp_path / "killed"
+    cfg = tmp_path / "quick.yaml"
+    cfg.write_text(json.dumps({**QUICK, "epochs": 6}))
+    cmd = [sys.executable, "-m", "datagen.cli", "train", "gnn", "--data", str(train_store), "--out", str(run),
+           "--config", str(cfg), "--device", "cpu"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=dict(os.environ))
+    last = run / "checkpoints" / "last.ckpt"
+    t0 = time.time()
+    while time.time() - t0 < 300 and proc.poll() is None:
+        if last.is_file() and len(epoch_losses(run)) >= 2:
+            break
+        time.sleep(0.2)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    done = len(epoch_losses(run))
+    assert 1 <= done < 6, done
+    r = subprocess.run([*cmd, "--resume"], capture_output=True, text=True)
+    assert r.returncode == 0, r.stderr[-2000:]
+    losses = epoch_losses(run)
+    print(f"\nkilled after {done} epochs; resumed to {len(losses)}")
+    assert len(losses) == 6
+    ckpt = torch.load(last, map_location="cpu", weights_only=False)
+    assert ckpt["epoch"] == 5 and "optimizer_states" in ckpt and "lr_schedulers" in ckpt
+
+
+class _no_raise:
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_ddp_on_two_cpu_processes_follows_one_process(train_store, tmp_path):
+    """torchrun with 2 gloo processes (2 graphs each) against one process (4 graphs): the same global
+    batch, so the epoch losses agree within noise (different sample order per process)."""
+    cfg = tmp_path / "ddp.yaml"
+    cfg.write_text(json.dumps({**QUICK, "epochs": 3}))
+    base = ["train", "gnn", "--data", str(train_store), "--config", str(cfg), "--device", "cpu"]
+    one = subprocess.run([sys.executable, "-m", "datagen.cli", *base, "--out", str(tmp_path / "one")],
+                         capture_output=True, text=True)
+    assert one.returncode == 0, one.stderr[-2000:]
+    env = dict(os.environ, OMP_NUM_THREADS="1")
+    two = subprocess.run([sys.executable, "-m", "torch.distributed.run", "--nproc-per-node", "2", "-m", "datagen.cli",
+                          *base, "--out", str(tmp_path / "two")], capture_output=True, text=True, env=env)
+    assert two.returncode == 0, two.stderr[-3000:]
+    a, b = epoch_losses(tmp_path / "one"), epoch_losses(tmp_path / "two")
+    print(f"\none process: {[round(x, 4) for x in a]}\ntwo processes: {[round(x, 4) for x in b]}")
+    assert len(a) == len(b) == 3
+    assert b[-1] < b[0]
+    np.testing.assert_allclose(b, a, rtol=0.35)
+
+
+def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
+    from datagen.config import load_config
+    from training.gnn.run import evaluate_gnn, train_gnn
+
+    run, _ = trained
+    with pytest.raises(InputError, match="exists and is not empty; give --resume"):
+        train_gnn(train_store, run, TrainConfig(**QUICK), device="cpu")
+    with pytest.raises(InputError, match="asked for a GPU but torch sees none") if not torch.cuda.is_available() \
+            else _no_raise():
+        train_gnn(train_store, tmp_path / "gpu", TrainConfig(**QUICK), device="cuda")
+    with pytest.raises(ConfigError, match="ablation = 'nope' is not allowed"):
+        load_config(TrainConfig, {"ablation": "nope"})
+    with pytest.raises(InputError, match="not a drape run directory"):
+        evaluate_gnn(tmp_path, device="cpu")
+    with pytest.raises(InputError, match="is not a drape dataset store"):
+        train_gnn(tmp_path, tmp_path / "x", TrainConfig(**QUICK), device="cpu")
+    assert not (tmp_path / "x").exists()

@@ -1,0 +1,204 @@
+"""Paper 000's detail-aware graph network (§4.2-4.4, §5.1), with the ablations of §5.3 as switches.
+
+- :class:`GATBlock`: a graph-attention block with the self-reinforced stream [LSK20]: torch_geometric's
+  ``GATConv`` (4 heads, concatenated) aggregates the neighbours, a linear map carries the node's own
+  features; the two streams are concatenated (half the width each: §5.1's first block is 256 = 128
+  self + 4 x 32 attention).
+- :class:`CoarseNet` (W_coarse, eq. 5-6): one 256-wide block with Tanh, then a magnitude and a
+  direction branch of three blocks [512, 512, 256] and fully connected layers [256, 128, 1] (ReLU)
+  and [256, 128, 3] (Tanh, then normalised to unit length); Δ = |Δ| ⊙ δ (eq. 4).
+- :class:`ParserNet` (W_parser): (α, β, θ) through fully connected layers [256, 512, 1024], ReLU.
+- :class:`DetailNet` (W_detail, eq. 7-9): a 1024-wide block multiplied element-wise by the parser's
+  encoding, then two branches of four blocks [256, 256, 128, 96] with edge-contraction pooling
+  (torch_geometric's ``EdgePooling``, Diehl 2019: about half the nodes) after the second block and
+  unpooling before the fourth, and fully connected layers [128, 64, 1] / [128, 64, 3].
+
+Glorot initialisation for the graph layers (``GATConv``'s own), Kaiming for the others (§5.3).
+
+Ablations (:data:`ABLATIONS`, §5.3; capacities kept comparable by widening what remains):
+``no_decomposition`` (one branch predicts Δ directly), ``output_limit`` (one branch, Tanh output
+scaled by 5: a bounded Δ), ``no_parser`` (α, β, θ appended to every node instead), ``concat_parser``
+(the encoding concatenated instead of multiplied), ``single_step`` (one network from the body graph
+straight to the detailed garment), ``no_pooling``.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+from training.config import ABLATIONS
+
+OUTPUT_LIMIT = 5.0
+"""Scale of the bounded output of the ``output_limit`` ablation (in the target unit)."""
+
+
+def _kaiming(layer: nn.Linear) -> nn.Linear:
+    nn.init.kaiming_uniform_(layer.weight, nonlinearity="relu")
+    nn.init.zeros_(layer.bias)
+    return layer
+
+
+class GATBlock(nn.Module):
+    """Graph attention plus the self-reinforced stream: ``[W x_i ‖ GAT(x)_i]``, ``out`` features."""
+
+    def __init__(self, in_channels: int, out_channels: int, heads: int = 4):
+        from torch_geometric.nn import GATConv
+
+        super().__init__()
+        half = out_channels // 2
+        if half % heads or out_channels % 2:
+            raise ValueError(f"a GAT block of {out_channels} features needs half of them divisible by {heads} heads")
+        self.self_stream = _kaiming(nn.Linear(in_channels, half))
+        self.attention = GATConv(in_channels, half // heads, heads=heads, concat=True)  # Glorot inside
+
+    def forward(self, x: torch.Tensor, edge_index: torch.Tensor) -> torch.Tensor:
+        return torch.cat([self.self_stream(x), self.attention(x, edge_index)], dim=-1)
+
+
+def _mlp(sizes: list[int], activation: type[nn.Module], last: nn.Module | None) -> nn.Sequential:
+    layers: list[nn.Module] = []
+    for k in range(len(sizes) - 1):
+        layers.append(_kaiming(nn.Linear(sizes[k], sizes[k + 1])))
+        if k < len(sizes) - 2:
+            layers.append(activation())
+    if last is not None:
+        layers.append(last)
+    return nn.Sequential(*layers)
+
+
+class _Branch(nn.Module):
+    """GAT blocks then fully connected layers; optional edge-contraction pooling around the middle."""
+
+    def __init__(self, in_channels: int, widths: list[int], head: list[int], activation: type[nn.Module],
+                 last: nn.Module | None, *, pool_after: int | None = None):
+        super().__init__()
+        self.blocks = nn.ModuleList()
+        c = in_channels
+        for w in widths:
+            self.blocks.append(GATBlock(c, w))
+            c = w
+        self.act = activation()
+        self.pool_after = pool_after
+        if pool_after is not None:
+            from torch_geometric.nn import EdgePooling
+
+            self.pool = EdgePooling(widths[pool_after])
+        self.head = _mlp([c, *head], activation, last)
+
+    def forward(self, x: torch.Tensor, edge_index: torch.Tensor, batch: torch.Tensor) -> torch.Tensor:
+        info = None
+        e = edge_index
+        for k, block in enumerate(self.blocks):
+            if info is not None and k == len(self.blocks) - 1:  # unpool before the last block
+                x, e, batch = self.pool.unpool(x, info)
+                info = None
+            x = self.act(block(x, e))
+            if self.pool_after is not None and k == self.pool_after:
+                x, e, batch, info = self.pool(x, e, batch)
+        if info is not None:
+            x, e, batch = self.pool.unpool(x, info)
+        return self.head(x)
+
+
+class _Output(nn.Module):
+    """Δ from node features: magnitude x unit direction (eq. 4), or one branch for the ablations."""
+
+    def __init__(self, in_channels: int, widths: list[int], head: list[int], *, mode: str,
+                 pool_after: int | None = None):
+        super().__init__()
+        self.mode = mode
+        if mode == "decomposed":
+            self.magnitude = _Branch(in_channels, widths, [*head, 1], nn.ReLU, nn.ReLU(), pool_after=pool_after)
+            self.direction = _Branch(in_channels, widths, [*head, 3], nn.Tanh, nn.Tanh(), pool_after=pool_after)
+        else:  # one branch of double width: about the same capacity
+            wide = [2 * w for w in widths]
+            last = nn.Tanh() if mode == "limited" else None
+            self.direct = _Branch(in_channels, wide, [*[2 * h for h in head], 3], nn.ReLU, last, pool_after=pool_after)
+
+    def forward(self, x, edge_index, batch) -> torch.Tensor:
+        if self.mode == "decomposed":
+            m = self.magnitude(x, edge_index, batch)
+            d = nn.functional.normalize(self.direction(x, edge_index, batch), dim=-1)
+            return m * d
+        out = self.direct(x, edge_index, batch)
+        return OUTPUT_LIMIT * out if self.mode == "limited" else out
+
+
+def _mode(ablation: str) -> str:
+    return {"no_decomposition": "direct", "output_limit": "limited"}.get(ablation, "decomposed")
+
+
+class CoarseNet(nn.Module):
+    """W_coarse: body graph features [n^{b'}, p^{b'}, α₁] (R^7) -> Δ_coarse [N, 3]."""
+
+    def __init__(self, in_channels: int = 7, ablation: str = "full"):
+        super().__init__()
+        self.first = GATBlock(in_channels, 256)
+        self.out = _Output(256, [512, 512, 256], [256, 128], mode=_mode(ablation))
+
+    def forward(self, x, edge_index, batch) -> torch.Tensor:
+        return self.out(torch.tanh(self.first(x, edge_index)), edge_index, batch)
+
+
+class ParserNet(nn.Module):
+    """W_parser: multi-source attributes (α, β, θ) -> a detail-aware encoding [B, 1024]."""
+
+    def __init__(self, in_features: int, width: int = 1024):
+        super().__init__()
+        self.net = _mlp([in_features, 256, 512, width], nn.ReLU, nn.ReLU())
+
+    def forward(self, attributes: torch.Tensor) -> torch.Tensor:
+        return self.net(attributes)
+
+
+class DetailNet(nn.Module):
+    """W_detail: garment graph features [n, p, x] (R^30), infused with W_parser's encoding -> Δ_detail."""
+
+    def __init__(self, in_channels: int, attribute_features: int, ablation: str = "full", width: int = 1024):
+        super().__init__()
+        self.ablation = ablation
+        node_in = in_channels + (attribute_features if ablation in ("no_parser", "single_step") else 0)
+        self.first = GATBlock(node_in, width)
+        self.parser = ParserNet(attribute_features, width) if ablation not in ("no_parser", "single_step") else None
+        branch_in = 2 * width if ablation == "concat_parser" else width
+        pool = None if ablation == "no_pooling" else 1
+        self.out = _Output(branch_in, [256, 256, 128, 96], [128, 64], mode=_mode(ablation), pool_after=pool)
+
+    def forward(self, x, edge_index, batch, attributes) -> torch.Tensor:
+        per_node = attributes[batch]
+        if self.parser is None:
+            h = torch.tanh(self.first(torch.cat([x, per_node], dim=-1), edge_index))
+        else:
+            h = torch.tanh(self.first(x, edge_index))
+            code = self.parser(attributes)[batch]
+            h = torch.cat([h, code], dim=-1) if self.ablation == "concat_parser" else h * code  # eq. 7
+        return self.out(h, edge_index, batch)
+
+
+class DetailAwareGNN(nn.Module):
+    """Both steps of paper 000: Δ_coarse from the body graph, Δ_detail from the garment graph.
+
+    ``single_step`` replaces them with one DetailNet from the body graph's features (and the
+    attributes) straight to ``detail - anchor``.
+    """
+
+    def __init__(self, *, coarse_features: int = 7, detail_features: int = 30, attribute_features: int = 85,
+                 ablation: str = "full"):
+        super().__init__()
+        if ablation not in ABLATIONS:
+            raise ValueError(f"unknown ablation {ablation!r}; ablations are {list(ABLATIONS)}")
+        self.ablation = ablation
+        if ablation == "single_step":
+            self.coarse = None
+            self.detail = DetailNet(coarse_features, attribute_features, ablation)
+        else:
+            self.coarse = CoarseNet(coarse_features, ablation if ablation in ("no_decomposition", "output_limit")
+                                    else "full")
+            self.detail = DetailNet(detail_features, attribute_features, ablation)
+
+    def forward_coarse(self, x, edge_index, batch) -> torch.Tensor:
+        return self.coarse(x, edge_index, batch)
+
+    def forward_detail(self, x, edge_index, batch, attributes) -> torch.Tensor:
+        return self.detail(x, edge_index, batch, attributes)

@@ -1,0 +1,82 @@
+"""Paper 000's model in the training loop: losses, the inference path and the validation error.
+
+Training follows the paper: W_coarse learns Δ_coarse from the body graph; W_parser and W_detail
+learn Δ_detail from the garment graph whose features come from the ground-truth coarse mesh
+(MSE on both, optimised together; each step's graph is independent of the other's prediction).
+Inference (validation, evaluation, prediction) chains them: the detail features (coarse normals
+and joint distances) are recomputed from the *predicted* coarse mesh with the store's feature
+function (``datagen.geometry.features``), so the validation error is the error a user gets.
+"""
+
+from __future__ import annotations
+
+import pytorch_lightning as pl
+import torch
+
+from datagen.geometry.features import joint_distances, vertex_normals
+from training.gnn.model import DetailAwareGNN
+
+
+def detail_features(coarse: torch.Tensor, batch) -> torch.Tensor:
+    """[n, p, x] (R^30) of a batch's garments at the coarse positions ``coarse`` [N, 3]."""
+    normals = vertex_normals(coarse[None], batch.face.T)[0]
+    x = joint_distances(coarse[:, None, :], batch.joints[batch.batch])[:, 0]  # [N, J]
+    return torch.cat([normals, batch.skin, x], dim=1)
+
+
+class GNNModule(pl.LightningModule):
+    """The Lightning module of paper 000's GNN (config: :class:`training.config.TrainConfig` as a dict)."""
+
+    def __init__(self, config: dict, attribute_features: int):
+        super().__init__()
+        self.save_hyperparameters()
+        self.config = config
+        self.model = DetailAwareGNN(attribute_features=attribute_features, ablation=config["ablation"])
+        self.scale = float(config["target_scale"])
+
+    # -- prediction
+
+    def predict_frames(self, batch) -> tuple[torch.Tensor, torch.Tensor]:
+        """(coarse, detail) garment positions [N, 3] (m) for a batch, as at inference."""
+        if self.model.coarse is None:  # single step: straight from the body graph
+            d = self.model.forward_detail(batch.x_coarse, batch.edge_index, batch.batch, batch.attributes)
+            detail = batch.anchor + d / self.scale
+            return detail, detail
+        dc = self.model.forward_coarse(batch.x_coarse, batch.edge_index, batch.batch)
+        coarse = batch.anchor + dc.float() / self.scale
+        x = detail_features(coarse, batch)
+        dd = self.model.forward_detail(x, batch.edge_index, batch.batch, batch.attributes)
+        return coarse, coarse + dd.float() / self.scale
+
+    # -- steps
+
+    def training_step(self, batch, _):
+        mse = torch.nn.functional.mse_loss
+        n = batch.num_graphs
+        if self.model.coarse is None:
+            d = self.model.forward_detail(batch.x_coarse, batch.edge_index, batch.batch, batch.attributes)
+            loss = mse(d.float(), (batch.detail - batch.anchor) * self.scale)
+            self.log("train/loss", loss, batch_size=n, prog_bar=True, sync_dist=True, on_epoch=True)
+            return loss
+        dc = self.model.forward_coarse(batch.x_coarse, batch.edge_index, batch.batch)
+        dd = self.model.forward_detail(batch.x_detail, batch.edge_index, batch.batch, batch.attributes)
+        loss_c = mse(dc.float(), batch.y_coarse * self.scale)
+        loss_d = mse(dd.float(), batch.y_detail * self.scale)
+        loss = loss_c + loss_d
+        self.log_dict({"train/loss": loss, "train/loss_coarse": loss_c, "train/loss_detail": loss_d}, batch_size=n,
+                      prog_bar=True, sync_dist=True, on_epoch=True)
+        return loss
+
+    def validation_step(self, batch, _):
+        coarse, detail = self.predict_frames(batch)
+        n = batch.num_nodes
+        err_c = 1000 * (coarse - batch.coarse).norm(dim=-1).mean()
+        err_d = 1000 * (detail - batch.detail).norm(dim=-1).mean()
+        self.log_dict({"val/coarse_mm": err_c, "val/detail_mm": err_d}, batch_size=n, prog_bar=True,
+                      sync_dist=True, on_epoch=True, on_step=False)
+
+    def configure_optimizers(self):
+        opt = torch.optim.Adam(self.parameters(), lr=self.config["lr"])
+        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"],
+                                                           patience=self.config["lr_patience"])
+        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val/detail_mm"}}

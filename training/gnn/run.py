@@ -1,0 +1,198 @@
+"""Train, evaluate and predict with paper 000's GNN from a dataset store (what the CLI calls).
+
+- :func:`train_gnn`: a run directory from a store and a :class:`~training.config.TrainConfig`.
+- :func:`evaluate_gnn`: the tables of paper 000 §5.2 on a split: mean per-vertex error (mm) of
+  the coarse and the detailed prediction per body (Table 1) and over the whole split (Table 2:
+  unseen garments, bodies and poses on the test split), beside two trivial baselines (Δ = 0, the
+  body surface at the anchor; and the skinned garment), and the share of predicted vertices inside
+  the posed body.
+- :func:`predict_sample`: every frame of one sample predicted, with the per-vertex error.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from datagen.errors import InputError
+from datagen.store import open_store
+from training.config import TrainConfig
+from training.data import FrameDataset
+from training.loop import RUN_FILE, fit, prepare_run, resolve_device, seed_everything
+
+KIND = "gnn"
+
+
+def _store_identity(store) -> dict:
+    return {"path": str(Path(store.path).resolve()), "seed": store.seed, "code_version": store.attrs.get("code_version"),
+            "schema_version": store.attrs.get("schema_version")}
+
+
+def _loader(ds, config: TrainConfig, *, shuffle: bool, accelerator: str):
+    """A DataLoader of ``batch_size / processes`` graphs per process (``batch_size`` is the global batch)."""
+    import os
+
+    from torch_geometric.loader import DataLoader
+
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    if config.batch_size % world:
+        raise InputError(f"batch_size {config.batch_size} is the global batch; it must divide by the {world} "
+                         "processes")
+    g = torch.Generator()
+    g.manual_seed(config.seed)
+    return DataLoader(ds, batch_size=config.batch_size // world, shuffle=shuffle, num_workers=config.workers,
+                      pin_memory=accelerator == "gpu", persistent_workers=config.workers > 0, generator=g,
+                      exclude_keys=[])
+
+
+def train_gnn(data: str | Path, out: str | Path, config: TrainConfig, *, device: str = "auto", resume: bool = False,
+              force: bool = False) -> dict[str, Any]:
+    """Train paper 000's GNN on ``data``'s train split, choosing the checkpoint on its val split."""
+    from training.gnn.module import GNNModule
+
+    accelerator = resolve_device(device)
+    store = open_store(data)
+    train = FrameDataset(store, "train", max_frames=config.max_train_frames, seed=config.seed)
+    val = FrameDataset(store, "val", max_frames=config.max_val_frames, seed=config.seed)
+    meta = {"kind": KIND, "config": config.as_dict(), "store": _store_identity(store)}
+    out = prepare_run(out, resume=resume, force=force, meta=meta)
+    seed_everything(config.seed)
+    attribute_features = int(train[0].attributes.shape[1])
+    module = GNNModule(config.as_dict(), attribute_features)
+    t0 = time.perf_counter()
+    result = fit(module, _loader(train, config, shuffle=True, accelerator=accelerator),
+                 _loader(val, config, shuffle=False, accelerator=accelerator), config, out, device=device,
+                 resume=resume)
+    result |= {"seconds": time.perf_counter() - t0, "train_frames": len(train), "val_frames": len(val),
+               "parameters": sum(p.numel() for p in module.parameters())}
+    (out / "train_summary.json").write_text(json.dumps(result, indent=2))
+    return result
+
+
+def load_module(run: str | Path, *, checkpoint: str = "best"):
+    """The trained module of a run directory (``best`` or ``last`` checkpoint), on the CPU, in eval mode."""
+    from training.gnn.module import GNNModule
+
+    run = Path(run)
+    meta_path = run / RUN_FILE
+    if not meta_path.is_file():
+        raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
+    meta = json.loads(meta_path.read_text())
+    if meta.get("kind") != KIND:
+        raise InputError(f"{run} holds a {meta.get('kind')!r} model, not paper 000's {KIND!r}")
+    path = run / "checkpoints" / f"{checkpoint}.ckpt"
+    if not path.is_file():
+        path = run / "checkpoints" / "last.ckpt"
+    if not path.is_file():
+        raise InputError(f"{run} has no checkpoint yet (checkpoints/best.ckpt or last.ckpt); train it first")
+    module = GNNModule.load_from_checkpoint(path, map_location="cpu")
+    module.eval()
+    return module, meta, path
+
+
+@torch.no_grad()
+def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str = "test",
+                 max_frames: int | None = None, device: str = "auto", collisions: bool = True) -> dict[str, Any]:
+    """Paper 000's tables on ``split`` (see the module docstring); JSON-able."""
+    from torch_geometric.loader import DataLoader
+
+    module, meta, ckpt = load_module(run)
+    store = open_store(data or meta["store"]["path"])
+    accelerator = resolve_device(device)
+    dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
+    module.to(dev)
+    ds = FrameDataset(store, split, max_frames=max_frames, seed=0)
+    names = store.names["body_names"]
+    rows: dict[str, dict[str, list]] = {}
+    inside_total, vertex_total = 0, 0
+    t_model, n_frames = 0.0, 0
+    for batch in DataLoader(ds, batch_size=4, shuffle=False, num_workers=0):
+        batch = batch.to(dev)
+        t = time.perf_counter()
+        coarse, detail = module.predict_frames(batch)
+        if dev.type == "cuda":
+            torch.cuda.synchronize()
+        t_model += time.perf_counter() - t
+        n_frames += batch.num_graphs
+        skinned = batch.skin + batch.trans[batch.batch]
+        errs = {"coarse": (coarse - batch.coarse).norm(dim=-1), "detail": (detail - batch.detail).norm(dim=-1),
+                "zero_coarse": (batch.anchor - batch.coarse).norm(dim=-1),
+                "zero_detail": (batch.anchor - batch.detail).norm(dim=-1),
+                "skinned_detail": (skinned - batch.detail).norm(dim=-1)}
+        for k in range(batch.num_graphs):
+            body = names[int(batch.body[k])]
+            mask = batch.batch == k
+            for key in (body, "all"):
+                r = rows.setdefault(key, {m: [] for m in errs} | {"frames": []})
+                for m, e in errs.items():
+                    r[m].append(float(e[mask].mean()) * 1000)
+                r["frames"].append(1)
+            if collisions:
+                i, t = int(batch.sample[k]), int(batch.frame[k])
+                body_v = store.frames(i, t, names=["body_vertices"])["body_vertices"][0]
+                inside_total += _inside(detail[mask].cpu().numpy(), body_v, store.body_model()["faces"])
+                vertex_total += int(mask.sum())
+    table = {key: {m: float(np.mean(v)) for m, v in r.items() if m != "frames"} | {"frames": len(r["frames"])}
+             for key, r in rows.items()}
+    out = {"run": str(run), "checkpoint": str(ckpt), "split": split, "store": str(store.path), "frames": len(ds),
+           "ablation": meta["config"]["ablation"], "table": table,
+           "inside_body_share": inside_total / vertex_total if vertex_total else None,
+           "model_ms_per_frame": 1000 * t_model / max(n_frames, 1), "device": dev.type,
+           "parameters": sum(p.numel() for p in module.parameters()),
+           "model_mb": sum(p.numel() * p.element_size() for p in module.parameters()) / 1e6}
+    return out
+
+
+def _inside(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray) -> int:
+    """How many ``points`` are inside the closed body mesh (warp's signed distance, negative inside)."""
+    from datagen.geometry.queries import mesh_signed_distance, warp_mesh
+
+    d = mesh_signed_distance(warp_mesh(body_vertices.astype(np.float32), body_faces), points.astype(np.float32), 1.0)
+    return int((d < 0).sum())
+
+
+def format_evaluation(e: dict[str, Any]) -> str:
+    """Tables 1 and 2 of paper 000 as drape measures them."""
+    lines = [f"{e['split']} split of {e['store']}: {e['frames']} frames, model {e['ablation']} "
+             f"({e['parameters']:,} parameters, {e['model_mb']:.1f} MB), {e['model_ms_per_frame']:.1f} ms per frame "
+             f"on {e['device']}",
+             "",
+             "mean per-vertex error (mm)  coarse   detail | baselines: Δ=0 coarse  Δ=0 detail  skinned garment"]
+    for key, r in e["table"].items():
+        lines.append(f"{key:<26}{r['coarse']:>8.2f}{r['detail']:>9.2f} | {r['zero_coarse']:>19.2f}"
+                     f"{r['zero_detail']:>12.2f}{r['skinned_detail']:>17.2f}   ({r['frames']} frames)")
+    if e.get("inside_body_share") is not None:
+        lines.append(f"\npredicted detail vertices inside the posed body: {100 * e['inside_body_share']:.2f} %")
+    return "\n".join(lines)
+
+
+@torch.no_grad()
+def predict_sample(run: str | Path, data: str | Path, sample: int) -> dict[str, np.ndarray]:
+    """Every frame of ``sample`` predicted: ``coarse``, ``detail`` [T, V, 3] (m), ``error`` [T, V] (m)
+    against the simulated garment, with the ground truth ``truth`` and the ``garment`` index."""
+    from torch_geometric.data import Batch
+
+    module, meta, _ = load_module(run)
+    store = open_store(data)
+    if not 0 <= sample < store.sample_count:
+        raise InputError(f"--sample {sample} is not in 0 .. {store.sample_count - 1} ({store.path})")
+    ds = FrameDataset(store, store.names["split_names"][int(store.scalars(sample)["split"])])
+    rows = [k for k, (i, _) in enumerate(ds.rows) if i == sample]
+    if not rows:
+        raise InputError(f"sample {sample} of {store.path} has no recorded frames (it failed in simulation); "
+                         "choose a sample that passed (`drape info` lists the failures)")
+    coarse, detail, truth = [], [], []
+    for k in rows:
+        b = Batch.from_data_list([ds[k]])
+        c, d = module.predict_frames(b)
+        coarse.append(c.numpy())
+        detail.append(d.numpy())
+        truth.append(b.detail.numpy())
+    coarse, detail, truth = np.stack(coarse), np.stack(detail), np.stack(truth)
+    return {"coarse": coarse, "detail": detail, "truth": truth, "error": np.linalg.norm(detail - truth, axis=-1),
+            "garment": int(store.scalars(sample)["garment"])}

@@ -1,0 +1,146 @@
+"""The one training loop of every drape model: PyTorch Lightning's ``Trainer``, configured once.
+
+Why Lightning: it already does what a demanding user expects of a loop, tested by many: checkpoints
+that hold the optimiser, scheduler and RNG states and resume mid-run (``ckpt_path="last"``), early
+stopping, mixed precision, DDP (it reads ``torchrun``'s environment), progress bars, and TensorBoard
+and CSV logs; drape adds only the run directory, the seed and the device checks. (The GPU hosts
+ship ``pytorch_lightning``, the package this imports.)
+
+A run directory::
+
+    RUN/
+      run.json                 model kind, resolved training config, the store it trained on
+      checkpoints/last.ckpt    the last epoch (resume), best.ckpt (lowest validation error)
+      logs/tensorboard/        TensorBoard event files
+      logs/csv/attempt-K/metrics.csv   the same scalars as CSV, one file per start (a resumed run
+                               appends an attempt; :func:`read_metrics` joins them)
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+from pathlib import Path
+from typing import Any
+
+import torch
+
+from datagen.errors import InputError
+from training.config import TrainConfig
+
+RUN_FILE = "run.json"
+
+
+def resolve_device(device: str) -> str:
+    """Lightning's accelerator for ``device`` (cpu, cuda, auto), refusing a GPU that is not there."""
+    if device == "auto":
+        return "gpu" if torch.cuda.is_available() else "cpu"
+    if device.startswith("cuda"):
+        if not torch.cuda.is_available():
+            raise InputError(f"--device {device} asked for a GPU but torch sees none here (torch "
+                             f"{torch.__version__}); use --device cpu")
+        return "gpu"
+    if device != "cpu":
+        raise InputError(f"--device must be cpu, cuda or auto, not {device!r}")
+    return "cpu"
+
+
+def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, Any]) -> Path:
+    """Create the run directory (or check the one there for ``resume``); never overwrite silently."""
+    out = Path(out)
+    run_file = out / RUN_FILE
+    if int(os.environ.get("RANK", "0")) > 0:  # torchrun: rank 0 checks and creates; the others wait for it
+        import time
+
+        for _ in range(600):
+            if run_file.is_file() and json.loads(run_file.read_text()) == meta:
+                return out
+            time.sleep(0.1)
+        raise InputError(f"rank {os.environ['RANK']}: rank 0 did not prepare {out} within a minute")
+    if resume:
+        if not run_file.is_file():
+            raise InputError(f"--resume: {out} is not a drape run directory (no {RUN_FILE}); start a run there "
+                             "without --resume")
+        stored = json.loads(run_file.read_text())
+        different = [k for k in ("kind", "config", "store") if stored.get(k) != meta.get(k)]
+        if different:
+            raise InputError(f"--resume: {out} was trained with another {', '.join(different)} "
+                             f"(stored {', '.join(f'{k}={stored.get(k)!r:.80}' for k in different)}); resume with "
+                             "the same command, or give a new --out")
+        return out
+    if out.exists() and any(out.iterdir()):
+        if not force:
+            raise InputError(f"{out} exists and is not empty; give --resume to continue its run, --force to replace "
+                             "it, or a new --out")
+        if not (out / RUN_FILE).is_file():
+            raise InputError(f"--force would delete {out}, which is not a drape run directory (no {RUN_FILE}); "
+                             "remove it yourself or choose another --out")
+        shutil.rmtree(out)
+    out.mkdir(parents=True, exist_ok=True)
+    (out / RUN_FILE).write_text(json.dumps(meta, indent=2))
+    return out
+
+
+def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, device: str = "auto",
+        resume: bool = False, monitor: str = "val/detail_mm") -> dict[str, Any]:
+    """Train ``module`` with Lightning; returns the best validation value and the checkpoint paths."""
+    import pytorch_lightning as pl
+    from pytorch_lightning.callbacks import EarlyStopping, LearningRateMonitor, ModelCheckpoint
+    from pytorch_lightning.loggers import CSVLogger, TensorBoardLogger
+
+    try:
+        import tensorboard  # noqa: F401
+    except ImportError:
+        try:
+            import tensorboardX  # noqa: F401
+        except ImportError:
+            raise InputError("the TensorBoard logs need tensorboard (or tensorboardX): pip install tensorboard") from None
+    accelerator = resolve_device(device)
+    world = int(os.environ.get("WORLD_SIZE", "1"))  # torchrun: one process per device
+    precision = config.precision if config.precision != "auto" else ("bf16-mixed" if accelerator == "gpu" else "32")
+    best = ModelCheckpoint(dirpath=out / "checkpoints", filename="best", monitor=monitor, mode="min",
+                           enable_version_counter=False)
+    # every epoch's end, whatever the score (Lightning's save_last writes only when a best one is written)
+    latest = ModelCheckpoint(dirpath=out / "checkpoints", filename="last", enable_version_counter=False)
+    trainer = pl.Trainer(
+        max_epochs=config.epochs, accelerator=accelerator,
+        devices=int(os.environ.get("LOCAL_WORLD_SIZE", "1")) if world > 1 else 1,
+        num_nodes=max(1, world // int(os.environ.get("LOCAL_WORLD_SIZE", str(world)))) if world > 1 else 1,
+        strategy="ddp" if world > 1 else "auto", precision=precision,
+        callbacks=[best, latest, EarlyStopping(monitor=monitor, mode="min", patience=config.early_stop_patience),
+                   LearningRateMonitor(logging_interval="epoch")],
+        logger=[TensorBoardLogger(out / "logs", name="tensorboard", version=""),
+                CSVLogger(out / "logs", name="csv", version=f"attempt-{len(list((out / 'logs' / 'csv').glob('attempt-*')))}")],
+        max_time=None if config.max_minutes is None else {"minutes": config.max_minutes},
+        log_every_n_steps=1, deterministic=False, enable_model_summary=False,
+        gradient_clip_val=1.0)
+    trainer.fit(module, train_loader, val_loader,
+                ckpt_path=str(out / "checkpoints" / "last.ckpt") if resume and (out / "checkpoints" / "last.ckpt").is_file()
+                else None)
+    score = best.best_model_score
+    return {"best": None if score is None else float(score), "best_checkpoint": best.best_model_path,
+            "last_checkpoint": str(out / "checkpoints" / "last.ckpt"), "epochs": trainer.current_epoch}
+
+
+def read_metrics(run: str | Path, key: str) -> dict[int, float]:
+    """Epoch -> the last logged value of ``key`` over every attempt of a run (a later attempt wins)."""
+    import csv
+
+    out: dict[int, float] = {}
+    attempts = sorted((Path(run) / "logs" / "csv").glob("attempt-*"), key=lambda p: int(p.name.split("-")[1]))
+    for attempt in attempts:
+        f = attempt / "metrics.csv"
+        if not f.is_file():
+            continue
+        with f.open() as fh:
+            for row in csv.DictReader(fh):
+                if row.get(key) not in (None, ""):
+                    out[int(row["epoch"])] = float(row[key])
+    return dict(sorted(out.items()))
+
+
+def seed_everything(seed: int) -> None:
+    import pytorch_lightning as pl
+
+    pl.seed_everything(seed, workers=True, verbose=False)
