@@ -11,7 +11,7 @@ if ! python -m datagen.cli validate "$STORE" > /dev/null 2>&1; then
 fi
 python -m datagen.cli info "$STORE" > "$OUT/info.txt"
 python -m datagen.cli train gnn --data "$STORE" --out "$RUN" --config "$CONFIG" --device cuda --force 2>&1 \
-  | grep -v "^Module\|^loaded" | tail -40 > "$OUT/train.txt"
+  | grep -v "^Module\|^loaded" > "$OUT/train.txt"
 python -m datagen.cli evaluate "$RUN" --split test --json "$OUT/eval_test.json" --device cuda 2>&1 | grep -v "^Module\|^loaded" > "$OUT/eval_test.txt"
 python -m datagen.cli evaluate "$RUN" --split val --json "$OUT/eval_val.json" --device cuda 2>&1 | grep -v "^Module\|^loaded" > "$OUT/eval_val.txt"
 SAMPLE=$(python -c "from datagen.store import open_store; s=open_store('$STORE'); print(int(s.split('test', include_failed=False)[0]))")

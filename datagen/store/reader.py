@@ -14,6 +14,7 @@ when it is installed. A :class:`DatasetStore` pickles without its open handles, 
 from __future__ import annotations
 
 import logging
+import os
 import warnings
 from collections.abc import Iterator, Sequence
 from pathlib import Path
@@ -178,6 +179,7 @@ class DatasetStore:
         self._backend_cls = _backend(backend)
         self.backend: str = self._backend_cls.name
         self._rows = None
+        self._pid = os.getpid()
         self._index: dict[str, np.ndarray] | None = None
         self._bindings: dict[int, Any] = {}  # garment instance -> GarmentBinding
         self._body: dict[str, np.ndarray] | None = None
@@ -197,8 +199,9 @@ class DatasetStore:
 
     @property
     def rows(self):
-        if self._rows is None:
+        if self._rows is None or self._pid != os.getpid():  # opened here, or reopened in a forked child
             self._rows = self._backend_cls(self.path)
+            self._pid = os.getpid()
         return self._rows
 
     def array(self, path: str):

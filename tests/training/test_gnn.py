@@ -36,7 +36,7 @@ def trained(train_store, tmp_path_factory):
     from training.gnn.run import train_gnn
 
     run = tmp_path_factory.mktemp("runs") / "gnn"
-    result = train_gnn(train_store, run, TrainConfig(**QUICK), device="cpu")
+    result = train_gnn(train_store, run, TrainConfig(**{**QUICK, "workers": 1}), device="cpu")  # a worker process
     return run, result
 
 

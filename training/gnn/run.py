@@ -45,9 +45,10 @@ def _loader(ds, config: TrainConfig, *, shuffle: bool, accelerator: str):
                          "processes")
     g = torch.Generator()
     g.manual_seed(config.seed)
+    # spawn: the workers open the store themselves (tensorstore's threads do not survive a fork)
     return DataLoader(ds, batch_size=config.batch_size // world, shuffle=shuffle, num_workers=config.workers,
                       pin_memory=accelerator == "gpu", persistent_workers=config.workers > 0, generator=g,
-                      exclude_keys=[])
+                      multiprocessing_context="spawn" if config.workers > 0 else None)
 
 
 def train_gnn(data: str | Path, out: str | Path, config: TrainConfig, *, device: str = "auto", resume: bool = False,
