@@ -160,3 +160,25 @@ def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
     with pytest.raises(InputError, match="is not a drape dataset store"):
         train_gnn(tmp_path, tmp_path / "x", TrainConfig(**QUICK), device="cpu")
     assert not (tmp_path / "x").exists()
+
+
+def test_handshake_matching_is_a_matching_of_graph_edges_and_pooling_round_trips():
+    from training.gnn.pooling import FastEdgePooling, handshake_matching
+
+    torch.manual_seed(0)
+    n = 400
+    pairs = torch.randint(0, n, (2, 1600))
+    edges = torch.cat([pairs, pairs.flip(0)], dim=1)  # undirected, as garment graphs are
+    m = handshake_matching(edges, torch.rand(edges.shape[1]), n)
+    ok = m >= 0
+    partner = edges[1][m[ok]]
+    assert (edges[0][m[ok]] == torch.nonzero(ok).flatten()).all()  # each node's pair edge starts at it
+    assert (m[partner] >= 0).all() and (edges[1][m[partner]] == torch.nonzero(ok).flatten()).all()  # mutual
+    free = ~ok
+    assert not ((free[edges[0]] & free[edges[1]]) & (edges[0] != edges[1])).any(), "maximal: no free edge left"
+    pool = FastEdgePooling(16)
+    x = torch.randn(n, 16)
+    px, pe, pb, info = pool(x, edges, torch.zeros(n, dtype=torch.long))
+    assert n / 2 <= px.shape[0] < n and pe.max() < px.shape[0]
+    ux, ue, ub = pool.unpool(px, info)
+    assert ux.shape == x.shape and torch.equal(ue, edges)

@@ -10,8 +10,9 @@
 - :class:`ParserNet` (W_parser): (α, β, θ) through fully connected layers [256, 512, 1024], ReLU.
 - :class:`DetailNet` (W_detail, eq. 7-9): a 1024-wide block multiplied element-wise by the parser's
   encoding, then two branches of four blocks [256, 256, 128, 96] with edge-contraction pooling
-  (torch_geometric's ``EdgePooling``, Diehl 2019: about half the nodes) after the second block and
-  unpooling before the fourth, and fully connected layers [128, 64, 1] / [128, 64, 3].
+  (torch_geometric's ``EdgePooling``, Diehl 2019, with a matching that runs on the GPU:
+  :mod:`training.gnn.pooling`; about half the nodes) after the second block and unpooling before
+  the fourth, and fully connected layers [128, 64, 1] / [128, 64, 3].
 
 Glorot initialisation for the graph layers (``GATConv``'s own), Kaiming for the others (§5.3).
 
@@ -81,9 +82,9 @@ class _Branch(nn.Module):
         self.act = activation()
         self.pool_after = pool_after
         if pool_after is not None:
-            from torch_geometric.nn import EdgePooling
+            from training.gnn.pooling import FastEdgePooling
 
-            self.pool = EdgePooling(widths[pool_after])
+            self.pool = FastEdgePooling(widths[pool_after])
         self.head = _mlp([c, *head], activation, last)
 
     def forward(self, x: torch.Tensor, edge_index: torch.Tensor, batch: torch.Tensor) -> torch.Tensor:

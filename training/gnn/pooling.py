@@ -1,0 +1,90 @@
+"""Edge-contraction pooling (Diehl 2019) with a matching that runs on the GPU.
+
+torch_geometric's ``EdgePooling`` scores every edge with a learned linear map (softmax over each
+node's incoming edges, plus 0.5), then contracts a matching chosen greedily in descending score
+order, one edge at a time in a Python loop over all edges on the CPU. On a batch of eight
+3,000-vertex garments (~70,000 directed edges) that loop takes seconds per call, twice per forward
+pass of W_detail, and dominated a training step on an H100.
+
+:class:`FastEdgePooling` keeps everything of ``EdgePooling`` (the scoring layer and its parameters,
+the merged features ``(x_i + x_j) * score``, coarsened edges, ``unpool``) and replaces only the
+choice of the matching by a parallel handshake: each unmatched node proposes its best-scoring
+edge (an undirected edge scores the larger of its two directions) to an unmatched neighbour, and
+two nodes that propose each other are contracted; a few rounds over what is left give a
+maximal-or-nearly matching (about half the nodes, as the paper's "N_g
+roughly becomes half"). Greedy and handshake matchings agree on every edge that is the best of
+both its ends, so the highest-scoring contractions are the same; they can differ further down.
+Ties go to the lower edge index: the result is a pure function of the scores.
+"""
+
+from __future__ import annotations
+
+import torch
+from torch_geometric.nn import EdgePooling
+from torch_geometric.nn.pool.edge_pool import UnpoolInfo
+from torch_geometric.utils import coalesce, scatter
+
+HANDSHAKE_ROUNDS = 16
+"""Proposal rounds; each contracts the mutual best pairs among the nodes still unmatched."""
+
+
+def handshake_matching(edge_index: torch.Tensor, score: torch.Tensor, num_nodes: int,
+                       rounds: int = HANDSHAKE_ROUNDS) -> torch.Tensor:
+    """A matching of the graph as the chosen edge of each node's pair ([N], -1 for unmatched nodes)."""
+    src, dst = edge_index
+    E = src.numel()
+    eid = torch.arange(E, device=src.device)
+    # one score per undirected edge (the larger of its two directions): then the best free edge
+    # anywhere is the best of both its ends, so every round contracts at least one pair per component
+    key = torch.minimum(src, dst) * num_nodes + torch.maximum(src, dst)
+    _, inverse = torch.unique(key, return_inverse=True)
+    undirected = torch.full((int(inverse.max()) + 1 if E else 0,), -torch.inf, dtype=score.dtype, device=src.device)
+    score = undirected.scatter_reduce(0, inverse, score, reduce="amax")[inverse]
+    matched_edge = torch.full((num_nodes,), -1, dtype=torch.long, device=src.device)
+    for _ in range(rounds):
+        free = (src != dst) & (matched_edge[src] < 0) & (matched_edge[dst] < 0)
+        if not bool(free.any()):
+            break
+        s = torch.where(free, score, torch.full_like(score, -torch.inf))
+        best = torch.full((num_nodes,), -torch.inf, dtype=score.dtype, device=src.device)
+        best = best.scatter_reduce(0, src, s, reduce="amax")
+        is_best = free & (s == best[src])
+        pick = torch.full((num_nodes,), E, dtype=torch.long, device=src.device)
+        pick = pick.scatter_reduce(0, src[is_best], eid[is_best], reduce="amin")  # lowest index among ties
+        has = pick < E
+        proposal = torch.full((num_nodes,), -1, dtype=torch.long, device=src.device)
+        proposal[has] = dst[pick[has]]
+        nodes = torch.nonzero(has).flatten()
+        mutual = nodes[proposal[proposal[nodes]] == nodes]
+        if mutual.numel() == 0:
+            break
+        matched_edge[mutual] = pick[mutual]
+    return matched_edge
+
+
+class FastEdgePooling(EdgePooling):
+    """torch_geometric's ``EdgePooling`` with :func:`handshake_matching` instead of its Python loop."""
+
+    def _merge_edges(self, x, edge_index, batch, edge_score):
+        N = x.size(0)
+        matched_edge = handshake_matching(edge_index, edge_score.detach(), N)
+        nodes = torch.arange(N, device=x.device)
+        partner = torch.where(matched_edge >= 0, edge_index[1][matched_edge.clamp_min(0)], nodes)
+        leader = torch.minimum(nodes, partner)  # a pair is named by its lower node
+        is_pair_leader = (matched_edge >= 0) & (nodes == leader)
+        is_single = matched_edge < 0
+        pair_leaders = torch.nonzero(is_pair_leader).flatten()
+        singles = torch.nonzero(is_single).flatten()
+        P = pair_leaders.numel()
+        new_id = torch.empty(N, dtype=torch.long, device=x.device)
+        new_id[pair_leaders] = torch.arange(P, device=x.device)
+        new_id[singles] = torch.arange(P, P + singles.numel(), device=x.device)
+        cluster = new_id[leader]
+        size = P + singles.numel()
+        new_x = scatter(x, cluster, dim=0, dim_size=size, reduce="sum")
+        new_edge_score = torch.cat([edge_score[matched_edge[pair_leaders]], x.new_ones(singles.numel())])
+        new_x = new_x * new_edge_score.view(-1, 1)
+        new_edge_index = coalesce(cluster[edge_index], num_nodes=size)
+        new_batch = x.new_empty(size, dtype=torch.long).scatter_(0, cluster, batch)
+        return new_x, new_edge_index, new_batch, UnpoolInfo(edge_index=edge_index, cluster=cluster, batch=batch,
+                                                            new_edge_score=new_edge_score)
