@@ -1,0 +1,109 @@
+"""Paper 000's GNN: model size, inference time per frame and training throughput, on a synthetic
+garment-sized graph (a triangulated grid of about ``--vertices`` vertices; no store needed).
+
+Inference is :meth:`GNNModule.predict_frames` on one frame: W_coarse, the detail features
+recomputed from the predicted coarse mesh, W_parser and W_detail (what ``drape predict`` runs per
+frame). Training throughput is frames per second of full optimiser steps (forward, backward, Adam)
+at ``--batch`` frames per step. Paper 000: W_coarse 18.4 MB, W_detail + W_parser 19 MB, 21 ms per
+frame on an RTX 2080 Ti.
+
+    python benchmarks/bench_gnn.py [--vertices 3500] [--batch 8] [--device cpu|cuda] [--ablation full]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+import torch
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from training.config import TrainConfig  # noqa: E402
+from training.gnn.module import GNNModule  # noqa: E402
+
+
+def grid_frame(vertices: int, seed: int = 0):
+    """A torch_geometric Data shaped like one FrameDataset item, on a triangulated n x n grid."""
+    from torch_geometric.data import Data
+
+    g = torch.Generator().manual_seed(seed)
+    n = max(2, int(round(vertices ** 0.5)))
+    V = n * n
+    idx = torch.arange(V).reshape(n, n)
+    a, b, c, d = idx[:-1, :-1].flatten(), idx[:-1, 1:].flatten(), idx[1:, :-1].flatten(), idx[1:, 1:].flatten()
+    faces = torch.cat([torch.stack([a, b, d], 1), torch.stack([a, d, c], 1)])
+    e = torch.cat([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
+    e = torch.unique(torch.sort(e, dim=1).values, dim=0)
+    edges = torch.cat([e, e.flip(1)]).T.contiguous()
+    xy = torch.stack(torch.meshgrid(torch.linspace(0, 0.6, n), torch.linspace(0, 0.6, n), indexing="ij"), -1)
+    anchor = torch.cat([xy.reshape(V, 2), torch.zeros(V, 1)], 1)
+    r = lambda *s: torch.randn(*s, generator=g)  # noqa: E731
+    coarse = anchor + 0.02 * r(V, 3)
+    return Data(x_coarse=r(V, 7), x_detail=r(V, 30), edge_index=edges, num_nodes=V, y_coarse=coarse - anchor,
+                y_detail=0.003 * r(V, 3), anchor=anchor, coarse=coarse, detail=coarse + 0.003 * r(V, 3),
+                skin=anchor.clone(), attributes=r(1, 85), trans=torch.zeros(1, 3), joints=r(1, 24, 3),
+                face=faces.T.contiguous())
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--vertices", type=int, default=3500)
+    ap.add_argument("--batch", type=int, default=8)
+    ap.add_argument("--device", default="cuda" if torch.cuda.is_available() else "cpu")
+    ap.add_argument("--ablation", default="full")
+    ap.add_argument("--seconds", type=float, default=5.0, help="minimum time per measurement")
+    args = ap.parse_args()
+    from torch_geometric.data import Batch
+
+    dev = torch.device(args.device)
+    module = GNNModule(TrainConfig(ablation=args.ablation).as_dict(), 85).to(dev)
+    params = sum(p.numel() for p in module.parameters())
+    parts = {name: sum(p.numel() * p.element_size() for p in m.parameters()) / 1e6
+             for name, m in (("W_coarse", module.model.coarse), ("W_detail + W_parser", module.model.detail))
+             if m is not None}
+    one = Batch.from_data_list([grid_frame(args.vertices)]).to(dev)
+    batch = Batch.from_data_list([grid_frame(args.vertices, s) for s in range(args.batch)]).to(dev)
+    print(f"{args.ablation}: {params:,} parameters; " + ", ".join(f"{k} {v:.1f} MB" for k, v in parts.items())
+          + f"; graph of {one.num_nodes} vertices, {one.edge_index.shape[1]} directed edges; device {dev}")
+
+    def sync():
+        if dev.type == "cuda":
+            torch.cuda.synchronize()
+
+    module.eval()
+    with torch.no_grad():
+        for _ in range(3):
+            module.predict_frames(one)
+        sync()
+        n, t0 = 0, time.perf_counter()
+        while time.perf_counter() - t0 < args.seconds:
+            module.predict_frames(one)
+            sync()
+            n += 1
+        ms = 1000 * (time.perf_counter() - t0) / n
+    print(f"inference: {ms:.1f} ms per frame (batch of 1, coarse + detail features + detail; {n} runs)")
+    module.train()
+    opt = torch.optim.Adam(module.parameters(), lr=1e-3)
+    module.log = lambda *a, **k: None  # noqa: E731 (no trainer attached)
+    module.log_dict = lambda *a, **k: None  # noqa: E731
+    for _ in range(2):
+        opt.zero_grad()
+        module.training_step(batch, 0).backward()
+        opt.step()
+    sync()
+    n, t0 = 0, time.perf_counter()
+    while time.perf_counter() - t0 < args.seconds:
+        opt.zero_grad()
+        module.training_step(batch, 0).backward()
+        opt.step()
+        sync()
+        n += 1
+    dt = (time.perf_counter() - t0) / n
+    print(f"training: {1000 * dt:.0f} ms per step of {args.batch} frames = {args.batch / dt:.1f} frames/s ({n} steps)")
+
+
+if __name__ == "__main__":
+    main()
