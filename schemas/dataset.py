@@ -394,6 +394,8 @@ ROOT_ATTRIBUTES: dict[str, AttributeSpec] = {
     "segment_length": AttributeSpec(type="int", doc="frames per segment in index/segments"),
     "complete": AttributeSpec(type="bool", doc="true once pack() has finished; set last, atomically"),
     "units": AttributeSpec(type="dict", doc="array path -> unit (as each array's 'unit' attribute)"),
+    "checksums": AttributeSpec(type="dict", doc="array path -> {shard key: blake2b-128 digest} of every shard file, "
+                                                "recorded at pack; validate proves the files unchanged with it"),
     "fit_attribute": AttributeSpec(type="bool", doc="whether the fit attribute α was fitted (the config's "
                                                    "fit_attribute); false: garments/alpha is NaN and fit/ has D = 0"),
     "fit_diagnostics": AttributeSpec(type="dict", doc="the factor analysis's health: training pairs, factors, "

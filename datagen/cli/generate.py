@@ -30,9 +30,12 @@ def register(sub, formatter) -> None:
     p.add_argument("--print-config", action="store_true", help="print the resolved config and stop")
     p.set_defaults(func=_cmd_generate)
     p = sub.add_parser("validate", formatter_class=formatter, help="check a store against schemas/dataset.py",
-                       description="Check shapes, dtypes, units, offsets, finite values, disjoint splits and the "
-                       "fit model of a store; exit 1 and list every problem if any.")
+                       description="Check that a store is complete and intact (every shard file present and unchanged "
+                       "since pack, by the checksums pack recorded), then shapes, dtypes, units, offsets, finite "
+                       "values, disjoint splits and the fit model; exit 1 and list every problem if any.")
     p.add_argument("store")
+    p.add_argument("--quick", action="store_true",
+                   help="structure only: metadata, every shard file present, offsets; no checksums, no values")
     p.set_defaults(func=_cmd_validate)
     p = sub.add_parser("info", formatter_class=formatter, help="splits, counts, sizes and failures of a store",
                        description="Print a store's splits, sample and frame counts, sizes on disk and failures; "
@@ -104,7 +107,7 @@ def _cmd_generate(args) -> int:
 def _cmd_validate(args) -> int:
     from datagen.store import validate
 
-    problems = validate(args.store)
+    problems = validate(args.store, quick=args.quick)
     if problems:
         print(f"{args.store}: {len(problems)} problem(s)")
         for p in problems:

@@ -91,6 +91,9 @@ def store_info(path: str | Path) -> dict[str, Any]:
     per_frame = sum(sizes.get(g, {}).get("on_disk", 0) for g in ("vertex_frames", "frames"))
     info["bytes_per_garment_frame"] = per_frame / frames if frames else None
     info["fit"] = {"fitted": attrs.get("fit_attribute"), **(attrs.get("fit_diagnostics") or {})}
+    from datagen.store.validate import file_problems
+
+    info["damage"] = file_problems(path, attrs, meta, quick=True)[0]  # missing shard files (cheap)
     ff = idx["failure_frame"]
     info["failures"] = _failure_rows(failure, split, ff, failure_names)
     return info
@@ -184,6 +187,9 @@ def format_store_info(info: dict[str, Any]) -> str:
         if info.get("bytes_per_garment_frame"):
             lines.append(f"per stored garment-frame (vertex_frames + frames): {_bytes(info['bytes_per_garment_frame'])}")
         lines += [""] + _fit_lines(info.get("fit") or {})
+        if info.get("damage"):
+            lines += ["", f"DAMAGED: {len(info['damage'])} problem(s); run `drape validate` for all of them:"]
+            lines += [f"  {p}" for p in info["damage"][:5]]
     lines += ["", f"{'failure':<20}{'code':>5}{'count':>8}{'share':>8}" + "".join(f"{s:>7}" for s in SPLIT_NAMES)
               + f"{'median frame':>14}"]
     for row in info["failures"]:

@@ -96,6 +96,37 @@ def chunk_layout(spec: ArraySpec, shape: tuple[int, ...], chunking: Chunking | N
 
 
 
+CHECKSUM = "blake2b-128"
+"""The digest of every shard file, recorded at pack (root attribute ``checksums``)."""
+
+
+def file_digest(path: Path) -> str:
+    """:data:`CHECKSUM` of a file, as hex."""
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=16)
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 22), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def shard_checksums(array_dir: Path) -> dict[str, str]:
+    """Chunk key (``c/0/0``) -> digest of every shard file of a zarr v3 array directory."""
+    root = Path(array_dir)
+    return {str(f.relative_to(root)): file_digest(f) for f in sorted((root / "c").rglob("*")) if f.is_file()} \
+        if (root / "c").is_dir() else {}
+
+
+def shard_keys(shape: list[int], shard_shape: list[int]) -> list[str]:
+    """The chunk keys (``c/i/j/...``) of every shard that an array of ``shape`` has (default encoding,
+    separator ``/``): the files a complete array holds."""
+    import itertools
+
+    counts = [-(-int(n) // int(s)) if int(n) else 0 for n, s in zip(shape, shard_shape, strict=True)]
+    return ["c/" + "/".join(map(str, k)) for k in itertools.product(*(range(c) for c in counts))]
+
+
 def specs_of_group(group: str) -> list[ArraySpec]:
     return [a for a in ARRAYS.values() if a.group == group]
 

@@ -143,11 +143,55 @@ def value_problems(spec: ArraySpec, values: np.ndarray, *, name: str | None = No
 # --------------------------------------------------------------------------------------------- validate
 
 
-def validate(path: str | Path, *, check_values: bool = True) -> list[str]:
+def file_problems(path: Path, attrs: dict, meta: dict, quick: bool) -> tuple[list[str], set[str]]:
+    """Every shard file that the layout implies is there, and (unless ``quick``) unchanged since pack
+    (its checksum); returns the problems and the arrays with a missing file (a read would give zeros,
+    so their values are not checked; a changed file is still read, to say more about it)."""
+    from datagen.store.layout import file_digest, shard_keys
+
+    consolidated = (meta.get("consolidated_metadata") or {}).get("metadata") or {}
+    recorded = attrs.get("checksums") if isinstance(attrs.get("checksums"), dict) else {}
+    remake = (f"the store is damaged: restore the file from a copy, or make the store again "
+              f"(`drape info {path} --config > config.yaml && drape generate config.yaml --out NEW`)")
+    out: list[str] = []
+    damaged: set[str] = set()
+    for name in ARRAYS:
+        m = consolidated.get(name)
+        if not m or m.get("node_type") != "array":
+            continue
+        shape = [int(v) for v in m["shape"]]
+        shard = [int(v) for v in m["chunk_grid"]["configuration"]["chunk_shape"]]
+
+        def rows(key: str) -> str:
+            i = int(key.split("/")[1])
+            return f"rows {i * shard[0]} .. {min((i + 1) * shard[0], shape[0]) - 1}"
+
+        bad = []
+        for key in shard_keys(shape, shard):
+            f = path / name / key
+            if not f.is_file():
+                bad.append(f"'{name}': shard file {key} ({rows(key)}) is missing")
+                damaged.add(name)
+            elif not quick:
+                digest = (recorded.get(name) or {}).get(key)
+                if digest is None:
+                    bad.append(f"'{name}': shard file {key} ({rows(key)}) has no checksum recorded at pack")
+                elif file_digest(f) != digest:
+                    bad.append(f"'{name}': shard file {key} ({rows(key)}) differs from what pack wrote (its "
+                               f"checksum); truncated, overwritten or flipped bytes")
+        if bad:
+            out += [f"{b}: {remake}" for b in bad[:MAX_PROBLEMS_PER_CHECK]]
+            if len(bad) > MAX_PROBLEMS_PER_CHECK:
+                out.append(f"'{name}': and {len(bad) - MAX_PROBLEMS_PER_CHECK} more damaged shard files")
+    return out, damaged
+
+
+def validate(path: str | Path, *, check_values: bool = True, quick: bool = False) -> list[str]:
     """Every problem of the store at ``path`` against :mod:`schemas.dataset` (empty list: valid).
 
-    Checks the store is complete, the root attributes, every array's presence, dtype, shape and
-    unit, the offsets (start at 0, never decrease, end at their table's length, agree with the
+    Checks the store is complete, the root attributes, every shard file that the layout implies
+    (present; unless ``quick``, unchanged since pack by its recorded checksum), every array's
+    presence, dtype, shape and unit, the offsets (start at 0, never decrease, end at their table's length, agree with the
     garment vertex counts), codes and indices in range, finite values (``check_values``: reads all
     data block by block), segments, disjoint splits (no garment instance (type, seed), body or
     motion in two splits) and the fit model.
@@ -178,6 +222,10 @@ def validate(path: str | Path, *, check_values: bool = True) -> list[str]:
                         "complete)")
     if any(p.startswith("store is not marked") for p in problems) and not (path / "index").exists():
         return problems
+    damage, damaged = file_problems(path, attrs, meta, quick)
+    problems += damage
+    if quick:
+        check_values = False
 
     import zarr
 
@@ -199,7 +247,7 @@ def validate(path: str | Path, *, check_values: bool = True) -> list[str]:
         unit = arr.attrs.get("unit")
         if unit != spec.unit:
             problems.append(f"'{spec.path}' has unit attribute {unit!r}; the schema says {spec.unit!r}")
-        if dims.bind_shape(spec.path, tuple(arr.shape), spec.shape):
+        if dims.bind_shape(spec.path, tuple(arr.shape), spec.shape) and spec.path not in damaged:
             arrays[spec.path] = arr
     problems += dims.problems
     n = dims.sizes
@@ -303,7 +351,11 @@ class _Checker:
         if path not in self.a:
             return None
         if path not in self.cache:
-            self.cache[path] = self.a[path][...]
+            try:
+                self.cache[path] = self.a[path][...]
+            except Exception as exc:  # noqa: BLE001 (a damaged file: say so, check the rest)
+                self.say(f"'{path}' cannot be read: {type(exc).__name__}: {exc}")
+                self.cache[path] = None
         return self.cache[path]
 
     def say(self, text: str) -> None:
@@ -358,25 +410,31 @@ class _Checker:
             upper = self.upper(spec)
             if not is_float and _limits(spec, upper) == (None, None):
                 continue
-            reported = 0
-            for start, block in _blocks(arr):
-                if is_float and spec.finite == "fitted" and self.attrs.get("fit_attribute") is False:
-                    if not np.isnan(block).all():
-                        self.say(f"'{path}' must be NaN everywhere: the store has no fit attribute "
-                                 "(root attribute fit_attribute is false)")
-                    continue
-                if is_float and spec.finite == "ok_samples" and failed_rows is not None:
-                    skip = failed_rows[start:start + len(block)]
-                    if skip.any():  # a failed sample's metrics may be inf/nan
-                        block = block.copy()
-                        block[skip] = 0
-                probs = value_problems(spec, block, upper=upper, offset=start)
-                if probs:
-                    rows = np.flatnonzero(_bad_mask(spec, block, upper).reshape(len(block), -1).any(1))[:1] + start
-                    self.problems.extend(p + self._where(spec, rows) for p in probs)
-                    reported += 1
-                    if reported >= MAX_PROBLEMS_PER_CHECK:
-                        break
+            try:
+                self._check_blocks(path, arr, spec, upper, is_float, failed_rows)
+            except Exception as exc:  # noqa: BLE001 (a damaged file: say so, check the rest)
+                self.problems.append(f"'{path}' cannot be read: {type(exc).__name__}: {exc}")
+
+    def _check_blocks(self, path, arr, spec, upper, is_float, failed_rows) -> None:
+        reported = 0
+        for start, block in _blocks(arr):
+            if is_float and spec.finite == "fitted" and self.attrs.get("fit_attribute") is False:
+                if not np.isnan(block).all():
+                    self.say(f"'{path}' must be NaN everywhere: the store has no fit attribute "
+                             "(root attribute fit_attribute is false)")
+                return
+            if is_float and spec.finite == "ok_samples" and failed_rows is not None:
+                skip = failed_rows[start:start + len(block)]
+                if skip.any():  # a failed sample's metrics may be inf/nan
+                    block = block.copy()
+                    block[skip] = 0
+            probs = value_problems(spec, block, upper=upper, offset=start)
+            if probs:
+                rows = np.flatnonzero(_bad_mask(spec, block, upper).reshape(len(block), -1).any(1))[:1] + start
+                self.problems.extend(p + self._where(spec, rows) for p in probs)
+                reported += 1
+                if reported >= MAX_PROBLEMS_PER_CHECK:
+                    return
 
     def subdivision(self) -> None:
         """The subdivided body's triangles and the garments' indicator index its B + E vertices."""

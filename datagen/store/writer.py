@@ -49,6 +49,7 @@ from datagen.store.layout import (
     read_root_attributes,
     sample_dir_name,
     segment_table,
+    shard_checksums,
     specs_of_group,
     static_dir_name,
     storage_errors,
@@ -778,9 +779,11 @@ class _Packer:
                            ("index/sim_frame_start", p.sim_frame_start), ("index/segments", p.segments)):
             self._write(root, ARRAYS[name], data.shape, [data])
         fit = p.static["fit"]
+        checksums = {spec.path: shard_checksums(path / spec.path) for spec in ARRAYS.values()}
         attrs = {"format": STORE_FORMAT, **self.w._identity, "drape_version": __version__, "complete": False,
                  "units": {s.path: s.unit for s in ARRAYS.values()}, **p.names,
-                 "fit_attribute": bool(fit["dims"]["D"] > 0), "fit_diagnostics": fit.get("diagnostics", {})}
+                 "fit_attribute": bool(fit["dims"]["D"] > 0), "fit_diagnostics": fit.get("diagnostics", {}),
+                 "checksums": checksums}
         root.attrs.put(attrs)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec": we know
@@ -839,10 +842,11 @@ class _Packer:
         if spec.quantum is not None:
             attributes |= {"quantum": spec.quantum, "origin": "frames/joints[:, 0]",
                            "decode": "value * quantum + the frame's root joint (frames/joints[:, 0]), in metres"}
+        # every shard is written, zeros too: a missing file then always means damage (validate checks)
         arr = root.create_array(spec.path, shape=shape, dtype=spec.dtype, chunks=chunks, shards=shards,
                                 compressors=compressor(spec), fill_value=0, overwrite=True,
                                 dimension_names=[str(s) if isinstance(s, str) else None for s in spec.shape],
-                                attributes=attributes)
+                                attributes=attributes, config={"write_empty_chunks": True})
         if shape[0] == 0:
             return
         sink = _RowSink(arr, shards[0])
