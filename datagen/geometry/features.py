@@ -62,6 +62,17 @@ __all__ = [
 # ----------------------------------------------------------------------------- static parts
 
 
+def _cached_tensors(owner, device, dtype, floats: tuple[str, ...], ints: tuple[str, ...]) -> dict[str, torch.Tensor]:
+    """``owner``'s numpy fields as tensors on ``device`` (floats in ``dtype``, indices int64), made
+    once per device and dtype and kept in ``owner._tensors``."""
+    key = (str(device), dtype)
+    if key not in owner._tensors:
+        owner._tensors[key] = {**{n: torch.as_tensor(getattr(owner, n), dtype=dtype, device=device) for n in floats},
+                               **{n: torch.as_tensor(getattr(owner, n), dtype=torch.int64, device=device)
+                                  for n in ints}}
+    return owner._tensors[key]
+
+
 @dataclass(frozen=True, eq=False)
 class BodyShape:
     """The stored body model shaped by one β (numpy, float64).
@@ -94,13 +105,8 @@ class BodyShape:
         return len(self.shaped) + len(self.edges)
 
     def tensors(self, device, dtype) -> dict[str, torch.Tensor]:
-        """``shaped`` and ``weights`` as tensors on ``device`` (made once per device and dtype)."""
-        key = (str(device), dtype)
-        if key not in self._tensors:
-            self._tensors[key] = {"shaped": torch.as_tensor(self.shaped, dtype=dtype, device=device),
-                                  "weights": torch.as_tensor(self.weights, dtype=dtype, device=device),
-                                  "rest_joints": torch.as_tensor(self.rest_joints, dtype=dtype, device=device)}
-        return self._tensors[key]
+        """``shaped``, ``weights`` and ``rest_joints`` as tensors on ``device`` (made once per device and dtype)."""
+        return _cached_tensors(self, device, dtype, ("shaped", "weights", "rest_joints"), ())
 
 
 def body_shape(body: Mapping[str, np.ndarray], betas) -> BodyShape:
@@ -164,15 +170,8 @@ class GarmentBinding:
 
     def tensors(self, device, dtype) -> dict[str, torch.Tensor]:
         """The arrays as tensors on ``device`` (made once per device and dtype)."""
-        key = (str(device), dtype)
-        if key not in self._tensors:
-            out = {}
-            for name in ("rest", "weights", "anchor_rest", "ring_rest", "ring_weights"):
-                out[name] = torch.as_tensor(getattr(self, name), dtype=dtype, device=device)
-            for name in ("faces", "ring_faces", "ring_at"):
-                out[name] = torch.as_tensor(getattr(self, name), dtype=torch.int64, device=device)
-            self._tensors[key] = out
-        return self._tensors[key]
+        return _cached_tensors(self, device, dtype, ("rest", "weights", "anchor_rest", "ring_rest", "ring_weights"),
+                               ("faces", "ring_faces", "ring_at"))
 
 
 def bind_garment(shape: BodyShape, rest_vertices: np.ndarray, faces: np.ndarray, indicator: np.ndarray
