@@ -21,6 +21,7 @@ from __future__ import annotations
 import json
 import os
 import shutil
+import time
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +31,10 @@ from datagen.errors import InputError
 from training.config import TrainConfig
 
 RUN_FILE = "run.json"
+
+
+RESUME_MAY_CHANGE = ("epochs", "max_minutes")
+"""Config keys a resumed run may change: it may be given more epochs or more time."""
 
 
 def resolve_device(device: str) -> str:
@@ -63,11 +68,19 @@ def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, A
             raise InputError(f"--resume: {out} is not a drape run directory (no {RUN_FILE}); start a run there "
                              "without --resume")
         stored = json.loads(run_file.read_text())
-        different = [k for k in ("kind", "config", "store") if stored.get(k) != meta.get(k)]
+
+        def fixed(m: dict) -> dict:  # what a resumed run must share; it may run longer (epochs, minutes)
+            config = {k: v for k, v in (m.get("config") or {}).items() if k not in RESUME_MAY_CHANGE}
+            return {**m, "config": config}
+
+        different = [k for k in ("kind", "config", "store") if fixed(stored).get(k) != fixed(meta).get(k)]
         if different:
             raise InputError(f"--resume: {out} was trained with another {', '.join(different)} "
                              f"(stored {', '.join(f'{k}={stored.get(k)!r:.80}' for k in different)}); resume with "
-                             "the same command, or give a new --out")
+                             f"the same command (only {' and '.join(RESUME_MAY_CHANGE)} may change), or give a new "
+                             "--out")
+        if stored != meta:
+            (out / RUN_FILE).write_text(json.dumps(meta, indent=2))
         return out
     if out.exists() and any(out.iterdir()):
         if not force:
@@ -80,6 +93,32 @@ def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, A
     out.mkdir(parents=True, exist_ok=True)
     (out / RUN_FILE).write_text(json.dumps(meta, indent=2))
     return out
+
+
+def _throughput_callback():
+    """A Lightning callback measuring training samples per second (all processes together) per
+    epoch, validation excluded; logged as ``train/samples_per_s``."""
+    import pytorch_lightning as pl
+
+    class Throughput(pl.Callback):
+        def __init__(self):
+            self.rates: list[float] = []
+            self._t0 = 0.0
+            self._samples = 0
+
+        def on_train_epoch_start(self, trainer, pl_module):
+            self._t0, self._samples = time.perf_counter(), 0
+
+        def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx):
+            self._samples += int(getattr(batch, "num_graphs", 0) or len(batch)) * trainer.world_size
+
+        def on_train_epoch_end(self, trainer, pl_module):
+            seconds = time.perf_counter() - self._t0
+            if self._samples and seconds > 0:
+                self.rates.append(self._samples / seconds)
+                pl_module.log("train/samples_per_s", self.rates[-1], on_epoch=True, on_step=False)
+
+    return Throughput()
 
 
 def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, device: str = "auto",
@@ -103,13 +142,14 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
                            enable_version_counter=False)
     # every epoch's end, whatever the score (Lightning's save_last writes only when a best one is written)
     latest = ModelCheckpoint(dirpath=out / "checkpoints", filename="last", enable_version_counter=False)
+    throughput = _throughput_callback()
     trainer = pl.Trainer(
         max_epochs=config.epochs, accelerator=accelerator,
         devices=int(os.environ.get("LOCAL_WORLD_SIZE", "1")) if world > 1 else 1,
         num_nodes=max(1, world // int(os.environ.get("LOCAL_WORLD_SIZE", str(world)))) if world > 1 else 1,
         strategy="ddp" if world > 1 else "auto", precision=precision,
         callbacks=[best, latest, EarlyStopping(monitor=monitor, mode="min", patience=config.early_stop_patience),
-                   LearningRateMonitor(logging_interval="epoch")],
+                   LearningRateMonitor(logging_interval="epoch"), throughput],
         logger=[TensorBoardLogger(out / "logs", name="tensorboard", version=""),
                 CSVLogger(out / "logs", name="csv", version=f"attempt-{len(list((out / 'logs' / 'csv').glob('attempt-*')))}")],
         max_time=None if config.max_minutes is None else {"minutes": config.max_minutes},
@@ -120,7 +160,8 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
                 else None)
     score = best.best_model_score
     return {"best": None if score is None else float(score), "best_checkpoint": best.best_model_path,
-            "last_checkpoint": str(out / "checkpoints" / "last.ckpt"), "epochs": trainer.current_epoch}
+            "last_checkpoint": str(out / "checkpoints" / "last.ckpt"), "epochs": trainer.current_epoch,
+            "world_size": trainer.world_size, "train_samples_per_second": throughput.rates}
 
 
 def read_metrics(run: str | Path, key: str) -> dict[int, float]:

@@ -25,7 +25,8 @@ def register(sub, formatter) -> None:
     p.add_argument("--executor", default="local", choices=("local", "ray"))
     p.add_argument("--workers", type=int, default=None,
                    help="local: processes that build garments, compute targets and stage while the simulator runs "
-                        "(default: cores - 1, at most 8; 0: none); ray: Ray workers (default 2)")
+                        "(default: cores - 1, at most 8; 0: none); ray: CPUs of the local Ray cluster (default: every core; "
+                        "one task per GPU with --device cuda, else one per CPU)")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N)")
     p.add_argument("--print-config", action="store_true", help="print the resolved config and stop")
     p.set_defaults(func=_cmd_generate)
@@ -96,6 +97,13 @@ def _cmd_generate(args) -> int:
                   f"({summary['simulate_seconds']:.0f} s in {summary['batches']} batch(es)); end to end is "
                   f"{summary['garment_frames_per_second'] / summary['simulator_garment_frames_per_second']:.2f}x "
                   f"that; the simulating process waited {summary['wait_seconds']:.1f} s for the workers")
+        for t in summary.get("tasks", []):
+            where = (f"GPU {t['gpus']} (CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']})" if t["gpus"]
+                     else f"CPU (pid {t['pid']})")
+            rate = f", {t['garment_frames'] / t['simulate_seconds']:.2f} garment-frames/s in the simulator" \
+                if t["simulate_seconds"] else ""
+            print(f"  ray task {t['task']} on {t['host']} {where}: {t['samples']} scenes in {t['seconds']:.0f} s"
+                  f"{rate}")
     problems = validate(args.out)
     if problems:
         print("validate found problems:\n  " + "\n  ".join(problems), file=sys.stderr)

@@ -1,19 +1,36 @@
-"""``--executor ray``: scene batches as Ray tasks, each staging its own samples into the store.
+"""``--executor ray``: the scenes shared out as Ray tasks, one per GPU (or per CPU), each staging its
+own samples into the store.
 
-Each task rebuilds the plan from the config (a pure function of it), simulates its batch and
-stages every sample atomically (writers never share a file); the driver packs once all are
-staged. On a Ray cluster, tasks ask for one GPU each when ``device`` is ``cuda``. Ray is optional:
-``pip install 'drape[ray]'``.
+Placement. With ``device`` ``cuda`` every task asks Ray for one GPU; Ray sets the task's
+``CUDA_VISIBLE_DEVICES`` to that GPU alone, so the task's warp device ``cuda:0`` is its own card
+and no two tasks share one. The scenes are cut into at least as many contiguous shares as the
+cluster has GPUs (more when a share would exceed ``simulation.batch_size``), so every GPU gets a
+batch from the start. Each GPU task runs the same overlapped pipeline as the local executor
+(:func:`~datagen.generate.samples.simulate_samples`) with its share of the CPUs as workers. On the
+CPU every task is one CPU simulating one share in its own process.
+
+Staging. Every sample is written under a temporary name unique to its process
+(:func:`~datagen.store.layout.unique_temporary`: pid and a random suffix) and renamed into place
+with its completion marker last, so tasks on different GPUs never share a staging file, and a
+sample staged twice (a retried task) is staged once. The driver packs once every task is done.
+A task is a pure function of the config and its scene indices: the store equals the local one.
+
+Ray is optional: ``pip install 'drape[ray]'``. ``RAY_ADDRESS`` names an existing cluster;
+otherwise a local one is started with ``workers`` CPUs and the GPUs Ray finds.
 """
 
 from __future__ import annotations
 
+import math
+import os
+import time
 from pathlib import Path
 
 from datagen.errors import InputError
 
 
-def _import_ray():
+def import_ray():
+    """The ``ray`` module, or an :class:`InputError` saying how to install it."""
     try:
         import ray
     except ImportError:
@@ -21,47 +38,141 @@ def _import_ray():
     return ray
 
 
-def _task(config_dict: dict, out: str, indices: list[int], device: str | None) -> list[int]:
+def uses_gpu(device: str | None) -> bool:
+    return bool(device) and str(device).startswith("cuda")
+
+
+def shares(indices: list[int], batch_size: int, slots: int) -> list[list[int]]:
+    """Cut ``indices`` into contiguous shares, as even as possible: at least ``slots`` of them (one
+    per GPU or CPU, when there are that many scenes) and none longer than ``batch_size``."""
+    if not indices:
+        return []
+    n = max(min(slots, len(indices)), math.ceil(len(indices) / batch_size))
+    base, extra = divmod(len(indices), n)
+    out, start = [], 0
+    for k in range(n):
+        size = base + (1 if k < extra else 0)
+        out.append(list(indices[start:start + size]))
+        start += size
+    return out
+
+
+def _task(config_dict: dict, out: str, indices: list[int], device: str | None, workers: int, task: int,
+          queue) -> dict:
     from datagen.config import load_config
     from datagen.generate.config import DatasetConfig
     from datagen.generate.plan import Plan, open_writer
     from datagen.generate.samples import simulate_samples
 
+    t0 = time.perf_counter()
+    visible = os.environ.get("CUDA_VISIBLE_DEVICES")
+    gpus = []
+    if uses_gpu(device):
+        import ray
+
+        gpus = [int(g) if str(g).isdigit() else str(g) for g in ray.get_gpu_ids()]
+        device = "cuda:0"  # Ray made this task's GPU the only visible one
     plan = Plan(load_config(DatasetConfig, config_dict))
     writer = open_writer(plan, out)
     todo = writer.missing(indices)
-    simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s))
-    return todo
 
+    def progress(_kind, done, total, scenes):
+        if queue is not None and (done % 20 == 0 or done == total):
+            queue.put_nowait((task, done, total, scenes))
 
-def run_ray(config, out: str | Path, indices: list[int], *, device: str | None = None, workers: int = 2,
-            progress=None) -> None:
-    """Stage the samples ``indices`` with Ray tasks of ``config.simulation.batch_size`` scenes.
-
-    Uses the Ray cluster named by ``RAY_ADDRESS`` if set, else starts a local one with ``workers``
-    CPUs."""
-    import os
-
-    ray = _import_ray()
-    started = False
-    if not ray.is_initialized():
-        if os.environ.get("RAY_ADDRESS"):
-            ray.init(address=os.environ["RAY_ADDRESS"], log_to_driver=False)
+    stats: dict = {}
+    if todo:
+        if workers > 0:
+            stats = simulate_samples(plan, todo, device, progress=progress, out=out, workers=workers)
         else:
-            ray.init(num_cpus=workers, include_dashboard=False, log_to_driver=False)
-        started = True
-    try:
-        gpus = 1 if device and device.startswith("cuda") else 0
-        remote = ray.remote(num_cpus=1, num_gpus=gpus, max_retries=2)(_task)
-        bs = config.simulation.batch_size
-        batches = [indices[i:i + bs] for i in range(0, len(indices), bs)]
-        pending = [remote.remote(config.as_dict(), str(out), b, device) for b in batches]
-        done = 0
+            stats = simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s),
+                                     progress=progress)
+    return {"task": task, "gpus": gpus, "cuda_visible_devices": visible, "pid": os.getpid(),
+            "host": os.uname().nodename, "samples": len(todo), "seconds": time.perf_counter() - t0,
+            "simulate_seconds": stats.get("simulate_seconds", 0.0), "garment_frames": stats.get("garment_frames", 0)}
+
+
+class RayCluster:
+    """A Ray cluster joined (``RAY_ADDRESS``) or started locally, checked for what ``device`` needs.
+
+    Opened before the store is touched, so a missing Ray or a GPU-less cluster is an error before
+    anything is written."""
+
+    def __init__(self, device: str | None = None, workers: int | None = None):
+        self.ray = ray = import_ray()
+        self.device = device
+        self.started = False
+        if not ray.is_initialized():
+            if os.environ.get("RAY_ADDRESS"):
+                ray.init(address=os.environ["RAY_ADDRESS"], log_to_driver=False)
+            else:
+                ray.init(num_cpus=workers or os.cpu_count() or 1, include_dashboard=False, log_to_driver=False)
+            self.started = True
+        resources = ray.cluster_resources()
+        self.cpus, self.gpus = int(resources.get("CPU", 1)), int(resources.get("GPU", 0))
+        if uses_gpu(device) and self.gpus == 0:
+            self.close()
+            raise InputError(f"--device {device} with --executor ray, but the Ray cluster has no GPU (Ray found "
+                             f"{self.cpus} CPUs); run on a host with CUDA GPUs or use --device cpu")
+
+    def close(self) -> None:
+        if self.started:
+            self.ray.shutdown()
+            self.started = False
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def run(self, config, out: str | Path, indices: list[int], *, progress=None) -> dict:
+        """Stage the samples ``indices`` with Ray tasks: one per GPU (``device`` cuda) or per CPU.
+
+        Args:
+            progress: called as ``progress(0, frame, frames, scenes)`` from any task's simulator, and
+                ``progress(1, samples_done, samples, 0)`` as tasks finish.
+
+        Returns:
+            ``tasks``: per task its GPU ids, ``CUDA_VISIBLE_DEVICES``, samples, seconds, simulator
+            seconds and garment-frames; ``gpus`` and ``cpus``: what the cluster offered.
+        """
+        ray, device = self.ray, self.device
+        if uses_gpu(device):
+            per_task = max(1, self.cpus // self.gpus)
+            options = {"num_cpus": per_task, "num_gpus": 1}
+            pipeline_workers, slots = per_task - 1, self.gpus
+        else:
+            options = {"num_cpus": 1, "num_gpus": 0}
+            pipeline_workers, slots = 0, self.cpus
+        from ray.util.queue import Empty, Queue
+
+        queue = Queue(actor_options={"num_cpus": 0})
+        remote = ray.remote(max_retries=2)(_task).options(**options)
+        parts = shares(list(indices), config.simulation.batch_size, slots)
+        pending = [remote.remote(config.as_dict(), str(out), part, device, pipeline_workers, k, queue)
+                   for k, part in enumerate(parts)]
+        tasks, done = [], 0
         while pending:
-            ready, pending = ray.wait(pending, num_returns=1)
-            done += len(ray.get(ready[0]))
-            if progress:
-                progress(1, done, len(indices), 0)
-    finally:
-        if started:
-            ray.shutdown()
+            ready, pending = ray.wait(pending, num_returns=1, timeout=1.0)
+            while True:
+                try:
+                    _task_no, frame, frames, scenes = queue.get_nowait()
+                except Empty:
+                    break
+                if progress:
+                    progress(0, frame, frames, scenes)
+            for ref in ready:
+                try:
+                    result = ray.get(ref)
+                except ray.exceptions.RayTaskError as exc:
+                    cause = exc.cause if getattr(exc, "cause", None) is not None else exc
+                    if isinstance(cause, InputError):
+                        raise cause from None
+                    raise InputError(f"a Ray task failed: {type(cause).__name__}: {cause}; the samples staged so "
+                                     "far are kept: run the command again to resume") from None
+                tasks.append(result)
+                done += result["samples"]
+                if progress:
+                    progress(1, done, len(indices), 0)
+        return {"tasks": sorted(tasks, key=lambda t: t["task"]), "gpus": self.gpus, "cpus": self.cpus}

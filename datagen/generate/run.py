@@ -39,16 +39,34 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
 
     Args:
         executor: ``local`` (this process simulates; ``workers`` processes build garments, compute
-            targets and stage alongside) or ``ray`` (``workers`` Ray tasks each simulate a share).
-        workers: processes beside the simulating one (default
-            :func:`~datagen.generate.samples.default_workers`; 0: everything in this process).
+            targets and stage alongside) or ``ray`` (one Ray task per GPU, or per CPU on the CPU, each
+            simulating a share: :mod:`datagen.generate.ray_executor`).
+        workers: local: processes beside the simulating one (default
+            :func:`~datagen.generate.samples.default_workers`; 0: everything in this process); ray: the
+            local Ray cluster's CPUs (default: every core).
 
     Returns:
         ``samples``, ``simulated``, ``seconds`` (wall time), ``complete``, and for the local
         executor ``simulate_seconds`` (inside the simulator), ``garment_frames`` (recorded frames
         of the samples that did not fail) and the rates ``garment_frames_per_second`` (end to end)
-        and ``simulator_garment_frames_per_second``.
+        and ``simulator_garment_frames_per_second``; for the ray executor ``tasks`` (per task its
+        GPU, samples, seconds and simulator seconds), ``gpus`` and ``cpus``.
     """
+    if executor not in ("local", "ray"):
+        raise InputError(f"unknown executor {executor!r}; use local or ray")
+    cluster = None
+    if executor == "ray":  # Ray installed and the cluster fit for the device, before anything is written
+        from datagen.generate.ray_executor import RayCluster
+
+        cluster = RayCluster(device, workers)
+    try:
+        return _generate(config, out, executor, device, workers, progress, cluster)
+    finally:
+        if cluster is not None:
+            cluster.close()
+
+
+def _generate(config, out, executor, device, workers, progress, cluster) -> dict:
     plan = Plan(config)
     writer = open_writer(plan, out)
     if writer.is_complete:
@@ -68,12 +86,8 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
         else:
             stats = simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s),
                                      progress=progress)
-    elif executor == "ray":
-        from datagen.generate.ray_executor import run_ray
-
-        run_ray(config, out, todo, device=device, workers=2 if workers is None else workers, progress=progress)
-    else:
-        raise InputError(f"unknown executor {executor!r}; use local or ray")
+    elif todo:
+        ray_summary = cluster.run(config, out, todo, progress=progress)
     missing = writer.missing(range(plan.sample_count))
     if missing:
         raise InputError(f"{len(missing)} samples were not staged (first {missing[:5]}); run the command again to "
@@ -81,6 +95,8 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
     writer.pack()
     seconds = time.perf_counter() - t0
     summary = {"samples": plan.sample_count, "simulated": len(todo), "seconds": seconds, "complete": True}
+    if executor == "ray" and todo:
+        summary |= ray_summary
     if stats.get("simulate_seconds"):
         summary |= stats
         summary["garment_frames_per_second"] = stats["garment_frames"] / seconds

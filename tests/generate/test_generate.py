@@ -193,12 +193,36 @@ def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keep
 
 
 def test_ray_executor_makes_the_same_store(local_store, tmp_path):
+    """Two CPU tasks, each simulating a share of the five scenes in its own process."""
     pytest.importorskip("ray", reason="the Ray executor needs the ray extra: pip install 'drape[ray]'")
     out = tmp_path / "ray.zarr"
     summary = generate(micro(), out, executor="ray", workers=2)
-    assert summary["simulated"] == 5
+    assert summary["simulated"] == 5 and summary["cpus"] == 2
+    assert sorted(t["samples"] for t in summary["tasks"]) == [2, 3]
+    assert len({t["pid"] for t in summary["tasks"]}) == 2 and all(t["gpus"] == [] for t in summary["tasks"])
     assert validate(out) == []
     assert_same_store(local_store, out)
+
+
+def test_ray_refuses_cuda_without_gpus_before_writing(tmp_path):
+    pytest.importorskip("ray", reason="the Ray executor needs the ray extra: pip install 'drape[ray]'")
+    out = tmp_path / "none.zarr"
+    with pytest.raises(InputError, match="Ray cluster has no GPU"):
+        generate(micro(), out, executor="ray", device="cuda", workers=1)
+    assert not out.exists()
+
+
+def test_ray_shares_give_every_gpu_a_batch():
+    from datagen.generate.ray_executor import shares
+
+    assert [len(s) for s in shares(list(range(56)), 64, 2)] == [28, 28]  # small on two GPUs: one batch each
+    assert [len(s) for s in shares(list(range(56)), 64, 1)] == [56]
+    assert [len(s) for s in shares(list(range(130)), 64, 2)] == [44, 43, 43]  # none above the batch size
+    assert [len(s) for s in shares(list(range(3)), 64, 8)] == [1, 1, 1]
+    assert shares([], 64, 2) == []
+    for n, bs, slots in ((56, 64, 2), (130, 64, 2), (5, 2, 3), (7, 64, 4)):
+        parts = shares(list(range(n)), bs, slots)
+        assert sum(parts, []) == list(range(n)) and max(map(len, parts)) <= bs
 
 
 def test_config_errors_say_what_is_wrong():

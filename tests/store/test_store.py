@@ -532,6 +532,29 @@ def test_killed_staging_resumes_to_the_same_store(tmp_path):
     print(f"kills: {outcomes}, staged after each: {staged_counts}, half-written temporaries left: {partial_seen}")
 
 
+def test_two_processes_staging_one_store_give_the_same_store(tmp_path, packed):
+    """Two processes (two GPUs' Ray tasks, say) stage the same samples into one store at once: each
+    writes under its own temporary names, a sample staged by both is kept once, and the packed store
+    equals the one a single process makes."""
+    store = tmp_path / "ds"
+    env = dict(os.environ, PYTHONPATH=str(REPO))
+    procs = [subprocess.Popen([sys.executable, str(HELPER), str(store), "--samples", str(N), "--pause", "0.001"],
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env) for _ in range(2)]
+    for proc in procs:
+        out, err = proc.communicate(timeout=120)
+        assert proc.returncode == 0 and out.strip().endswith("done"), err
+    staging = store / STAGING
+    assert not [p.name for p in staging.iterdir() if p.name.startswith(TMP_PREFIX)]
+    assert sorted(p.name for p in staging.iterdir() if p.name.startswith("sample-")) == \
+        [f"sample-{i:09d}" for i in range(N)]
+    writer = sl.open_writer(store, N)
+    assert writer.missing() == [] and writer.pack()
+    assert validate(store) == []
+    a, b = read_everything(store), read_everything(packed)
+    for p in ARRAYS:
+        assert a[p].shape == b[p].shape and np.array_equal(a[p], b[p]), p
+
+
 # ----------------------------------------------------------------------------------- disk errors
 
 

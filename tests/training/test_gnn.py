@@ -61,6 +61,10 @@ def test_training_loss_falls_and_checkpoints_are_written(trained):
     losses = epoch_losses(run)
     print(f"\ntrain loss per epoch: {[round(x, 4) for x in losses]}; best val detail {result['best']:.2f} mm")
     assert len(losses) == QUICK["epochs"] and losses[-1] < losses[0]
+    # training throughput (validation excluded), one figure per epoch, also in the CSV log
+    rates = result["train_samples_per_second"]
+    assert len(rates) == QUICK["epochs"] and all(r > 0 for r in rates) and result["world_size"] == 1
+    assert len(epoch_losses(run, "train/samples_per_s")) == QUICK["epochs"]
     assert (run / "checkpoints" / "last.ckpt").is_file() and (run / "checkpoints" / "best.ckpt").is_file()
     assert list((run / "logs" / "tensorboard").glob("events.out.tfevents.*"))
     meta = json.loads((run / "run.json").read_text())
@@ -134,6 +138,12 @@ def test_ddp_on_two_cpu_processes_follows_one_process(train_store, tmp_path):
     assert len(a) == len(b) == 3
     assert b[-1] < b[0]
     np.testing.assert_allclose(b, a, rtol=0.35)
+    # the two-process run's checkpoint resumes in one process, given one more epoch
+    more = subprocess.run([sys.executable, "-m", "datagen.cli", *base, "--out", str(tmp_path / "two"), "--resume",
+                           "--epochs", "4"], capture_output=True, text=True)
+    assert more.returncode == 0, more.stderr[-2000:]
+    assert len(epoch_losses(tmp_path / "two")) == 4
+    assert json.loads((tmp_path / "two" / "run.json").read_text())["config"]["epochs"] == 4
 
 
 def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
@@ -146,6 +156,8 @@ def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
     with pytest.raises(InputError, match="asked for a GPU but torch sees none") if not torch.cuda.is_available() \
             else contextlib.nullcontext():
         train_gnn(train_store, tmp_path / "gpu", TrainConfig(**QUICK), device="cuda")
+    with pytest.raises(InputError, match="trained with another config.*only epochs and max_minutes may change"):
+        train_gnn(train_store, run, TrainConfig(**{**QUICK, "lr": 0.5}), device="cpu", resume=True)
     with pytest.raises(ConfigError, match="ablation = 'nope' is not allowed"):
         load_config(TrainConfig, {"ablation": "nope"})
     with pytest.raises(InputError, match="not a drape run directory"):

@@ -1,0 +1,49 @@
+#!/bin/bash
+# DDP training of paper 000's GNN with torchrun on 1 and N GPUs of one host (same global batch),
+# then the N-GPU run's checkpoint resumed on one GPU for one more epoch. Figures go to $OUT.
+#   OUT=/tmp/out STORE=/tmp/local1.zarr bash benchmarks/multigpu_train.sh [CONFIG]
+set -o pipefail
+export NCCL_NVLS_ENABLE=0 TORCH_SYMM_MEM_DISABLE_MULTICAST=1 NVSHMEM_DISABLE_NVLS=1
+OUT=${OUT:-/tmp/mg-out}; STORE=${STORE:-/tmp/local1.zarr}; CONFIG=${1:-benchmarks/configs/gnn_ddp.yaml}
+mkdir -p "$OUT"
+NGPU=$(python -c "import torch; print(torch.cuda.device_count())")
+for N in 1 $NGPU; do
+  torchrun --standalone --nproc-per-node $N -m datagen.cli train gnn --data "$STORE" --out /tmp/runs/ddp$N \
+    --config "$CONFIG" --device cuda --force > "$OUT/train_ddp$N.log" 2>&1
+  cp /tmp/runs/ddp$N/train_summary.json "$OUT/train_summary_ddp$N.json"
+done
+EPOCHS=$(python -c "import json; print(json.load(open('/tmp/runs/ddp$NGPU/run.json'))['config']['epochs'] + 1)")
+python -m datagen.cli train gnn --data "$STORE" --out /tmp/runs/ddp$NGPU --config "$CONFIG" --device cuda --resume \
+  --epochs $EPOCHS > "$OUT/resume_ddp${NGPU}_on1.log" 2>&1
+python - "$NGPU" "$OUT" <<'PY' | tee "$OUT/ddp.txt"
+import json, sys
+from training.loop import read_metrics
+n, out = int(sys.argv[1]), sys.argv[2]
+rates = {}
+for k in sorted({1, n}):
+    s = json.load(open(f"{out}/train_summary_ddp{k}.json"))
+    r = s["train_samples_per_second"]
+    rates[k] = sorted(r[1:] if len(r) > 1 else r)[len(r[1:] if len(r) > 1 else r) // 2]
+    print(f"N={k}: world {s['world_size']}, epochs {s['epochs']}, samples/s per epoch {[round(x, 1) for x in r]}, "
+          f"median after the first {rates[k]:.1f}; best val detail {s['best']:.2f} mm")
+    print(f"  train loss per epoch {[round(v, 4) for v in read_metrics(f'/tmp/runs/ddp{k}', 'train/loss_epoch').values()]}")
+    print(f"  val detail mm per epoch {[round(v, 2) for v in read_metrics(f'/tmp/runs/ddp{k}', 'val/detail_mm').values()]}")
+if n > 1:
+    print(f"scaling: {rates[n] / rates[1]:.2f}x on {n} GPUs, efficiency {rates[n] / rates[1] / n:.0%}")
+print(f"resumed on 1 GPU: epochs {list(read_metrics(f'/tmp/runs/ddp{n}', 'train/loss_epoch'))}")
+PY
+python - "$OUT" "$NGPU" <<'PY'
+import sys
+import matplotlib; matplotlib.use("Agg")
+import matplotlib.pyplot as plt
+from training.loop import read_metrics
+out, n = sys.argv[1], int(sys.argv[2])
+fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+for k in sorted({1, n}):
+    for a, key in zip(ax, ("train/loss_epoch", "val/detail_mm")):
+        m = read_metrics(f"/tmp/runs/ddp{k}", key)
+        a.plot(list(m), list(m.values()), "o-", label=f"{k} GPU(s)")
+        a.set_title(key); a.set_xlabel("epoch"); a.legend()
+fig.tight_layout(); fig.savefig(f"{out}/ddp_curves.png", dpi=100)
+PY
+tail -3 "$OUT/resume_ddp${NGPU}_on1.log"
