@@ -26,27 +26,27 @@ T = TypeVar("T")
 
 
 def read_config_file(path: str | Path) -> dict[str, Any]:
-    """Read a ``.toml``, ``.yaml`` or ``.yml`` file into a dict; errors name the file."""
+    """Read a ``.toml``, ``.yaml``/``.yml`` or ``.json`` file into a dict; errors name the file."""
     path = Path(path)
     if not path.is_file():
-        raise ConfigError(f"config file {path} does not exist; give the path of a .toml or .yaml file")
+        raise ConfigError(f"config file {path} does not exist; give the path of a .toml, .yaml or .json file")
     suffix = path.suffix.lower()
     try:
         if suffix == ".toml":
             with path.open("rb") as fh:
                 data = tomllib.load(fh)
-        elif suffix in (".yaml", ".yml"):
+        elif suffix in (".yaml", ".yml", ".json"):  # JSON is YAML (drape info --config prints JSON)
             import yaml
 
             with path.open("r", encoding="utf-8") as fh:
                 data = yaml.safe_load(fh)
         else:
-            raise ConfigError(f"config file {path} has suffix '{suffix}'; use .toml, .yaml or .yml")
+            raise ConfigError(f"config file {path} has suffix '{suffix}'; use .toml, .yaml, .yml or .json")
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
-        raise ConfigError(f"config file {path} is not valid TOML: {exc}") from exc
+        raise ConfigError(f"config file {path} is not valid TOML: {' '.join(str(exc).split())}") from exc
     except Exception as exc:  # yaml.YAMLError without importing yaml at module level
         if type(exc).__module__.startswith("yaml"):
-            raise ConfigError(f"config file {path} is not valid YAML: {exc}") from exc
+            raise ConfigError(f"config file {path} is not valid YAML: {' '.join(str(exc).split())}") from exc
         raise
     if data is None:
         data = {}

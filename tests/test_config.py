@@ -69,8 +69,10 @@ def test_bad_files(tmp_path):
         load_config(Example, tmp_path / "missing.toml")
     with pytest.raises(ConfigError, match="not valid TOML"):
         load_config(Example, write(tmp_path, "e.toml", "iterations = = 3"))
-    with pytest.raises(ConfigError, match="use .toml, .yaml or .yml"):
-        load_config(Example, write(tmp_path, "e.json", "{}"))
+    with pytest.raises(ConfigError, match="use .toml, .yaml, .yml or .json"):
+        load_config(Example, write(tmp_path, "e.ini", "{}"))
+    with pytest.raises(ConfigError, match="not valid YAML"):  # JSON is read as YAML
+        load_config(Example, write(tmp_path, "e.json", "{"))
 
 
 def test_section(tmp_path):

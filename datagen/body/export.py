@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import logging
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -57,8 +58,11 @@ def read_pose(source: str, frame: int = 0) -> tuple[np.ndarray, np.ndarray | Non
                 trans = npz["trans"][frame] if "trans" in npz.files else None
         else:
             raise InputError(f"pose file {path} must be .npy or .npz")
-    except (ValueError, OSError) as exc:
-        raise InputError(f"pose file {path} could not be read: {exc}") from exc
+    except (ValueError, OSError, EOFError, zipfile.BadZipFile) as exc:
+        if isinstance(exc, zipfile.BadZipFile) or "pickled" in str(exc):
+            raise InputError(f"pose file {path} is not a NumPy {path.suffix} file (it could not be read as one); "
+                             "give a .npy of 72 numbers or an .npz with a 'poses' array") from None
+        raise InputError(f"pose file {path} could not be read: {exc}") from None
     arr = np.asarray(arr, dtype=np.float64)
     if arr.size != 72:
         raise InputError(f"pose file {path} holds {arr.size} numbers; θ needs 72 (24 joints x 3, axis-angle)")

@@ -11,10 +11,14 @@ is mostly mass (-0.84): the presets move mainly along β3, as the paper's move a
 
 from __future__ import annotations
 
+import logging
+
 import numpy as np
 
 from datagen.body.model import BodyModel
 from datagen.errors import InputError
+
+logger = logging.getLogger(__name__)
 
 BODY_DENSITY = 985.0
 """Mean density of the human body [kg/m^3], to turn mesh volume into mass."""
@@ -42,6 +46,10 @@ def sample_betas(seed: int | np.random.Generator, count: int, shape_dim: int = 1
     return out
 
 
+BETA_POPULATION_RANGE = 3.0
+"""|β| beyond which a body leaves its shape space's population (β are standard deviations)."""
+
+
 def preset_betas(model: BodyModel, name: str) -> np.ndarray:
     """β [shape_dim] of a named preset stored in the model's metadata."""
     presets = model.meta.get("presets", {})
@@ -62,8 +70,15 @@ def resolve_betas(model: BodyModel, body: str | None = None, betas=None, seed: i
         b = np.asarray(betas, dtype=np.float64).reshape(1, -1)
         if b.shape[1] > model.shape_dim:
             raise InputError(f"{b.shape[1]} β values given; this body has {model.shape_dim}")
+        if not np.isfinite(b).all():
+            raise InputError(f"β values must be finite numbers, got {b.ravel().tolist()}")
         out = np.zeros((1, model.shape_dim))
         out[:, : b.shape[1]] = b
+        far = np.abs(b[0]) > BETA_POPULATION_RANGE
+        if far.any():
+            logger.warning("warning: β%s = %s lie beyond ±%g, the range of the shape space's population (β is in "
+                           "standard deviations): the body will not look like a person",
+                           [int(k) for k in np.flatnonzero(far)], [float(x) for x in b[0][far]], BETA_POPULATION_RANGE)
         return out
     if seed is not None:
         return sample_betas(seed, 1, model.shape_dim)

@@ -50,19 +50,33 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+_RESUME_HINTS = {
+    "generate": "what was staged is kept: run the same command again and it resumes from there",
+    "train": "the last finished epoch is in checkpoints/last.ckpt: run the same command with --resume to continue",
+}
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     logging.basicConfig(level=getattr(logging, args.log_level.upper()), format="%(message)s", stream=sys.stderr)
     for noisy in ("anny", "warp", "trimesh"):
         logging.getLogger(noisy).setLevel(max(logging.WARNING, logging.getLogger().level))
+    if args.log_level != "debug":  # warp's banner, kernel-compile lines and CPU-only driver notice: debug only
+        try:
+            from datagen.export.animation import quiet_warp
+
+            quiet_warp(logging.ERROR)
+        except ImportError:  # warp missing: the commands that need it say so
+            pass
     try:
         return int(args.func(args) or 0)
     except DrapeError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
-        print("interrupted", file=sys.stderr)
+        hint = _RESUME_HINTS.get(args.command)
+        print("interrupted" + (f"; {hint}" if hint else ""), file=sys.stderr)
         return 130
     except BrokenPipeError:  # output piped into `head` and the like: stop quietly
         devnull = os.open(os.devnull, os.O_WRONLY)

@@ -65,14 +65,41 @@ def _cmd_make(args) -> int:
     from datagen.garment.types import make_garment
     from datagen.params import parse_param_args
 
+    from datagen.garment.registry import EDGE_LENGTH_RANGE, garment_type
+    from datagen.materials import material
+
     out = Path(args.out)
     if out.suffix.lower() not in (".obj", ".ply", ".npz"):
         raise InputError(f"--out {out}: write .obj, .ply or .npz")
+    if not out.parent.is_dir():
+        raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
+    if args.show and not Path(args.show).parent.is_dir():
+        raise InputError(f"--show {args.show}: the folder {Path(args.show).parent} does not exist; create it first")
+    lo, hi = EDGE_LENGTH_RANGE
+    if args.edge_length is not None and not lo <= args.edge_length <= hi:
+        raise InputError(f"--edge-length must be between {lo} and {hi} m (the types' defaults are 13-20 mm), got "
+                         f"{args.edge_length:g}")
+    if args.seed < 0:
+        raise InputError(f"--seed must be 0 or more, got {args.seed}")
+    garment_type(args.type)  # an unknown type or material is refused before the body is loaded
+    if args.material:
+        material(args.material)
+    params = parse_param_args(args.param)
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
-    garment = make_garment(args.type, model, betas, seed=args.seed, params=parse_param_args(args.param),
-                           target_edge_length=args.edge_length, material_name=args.material)
+    try:
+        garment = make_garment(args.type, model, betas, seed=args.seed, params=params,
+                               target_edge_length=args.edge_length, material_name=args.material)
+    except Exception as exc:
+        if type(exc).__module__.startswith("pymeshlab"):
+            raise InputError(f"building the {args.type} failed in pymeshlab ({' '.join(str(exc).split())}); try the "
+                             "type's default --edge-length or another --seed") from None
+        raise
     c = check_garment(garment, np.asarray(model.shaped(betas))[0], model.faces)
+    if not c["ok"]:
+        raise InputError(f"the {args.type} (seed {args.seed}, {garment.metadata.vertex_count} vertices) fails its "
+                         f"checks: {'; '.join(c['failures'])}; nothing was written. Try the type's default "
+                         "--edge-length, another --seed or --param values")
     garment.save(out)
     m = garment.metadata
     print(f"wrote {out}: {args.type} seed {args.seed} on {args.body}: {m.vertex_count} vertices, {m.face_count} faces, "
@@ -86,4 +113,4 @@ def _cmd_make(args) -> int:
 
         render_garment(garment, np.asarray(model.shaped(betas))[0], model.faces, args.show)
         print(f"wrote {args.show}")
-    return 0 if c["ok"] else 1
+    return 0

@@ -63,22 +63,41 @@ def _cmd_generate(args) -> int:
     if args.print_config:
         print(json.dumps(config.as_dict(), indent=2))
         return 0
+    from tqdm import tqdm
+
+    from datagen.generate.run import simulated_frames
+
     plan = Plan(config)
+    rc = config.simulation
+    sim = simulated_frames(plan)
     print(f"dataset: {plan.sample_count} scenes ({', '.join(f'{k} {v.scene_count}' for k, v in config.splits.items())}"
           f"), {len(plan.instances)} garment instances, {len(plan.bodies)} bodies, {len(plan.motions)} motions, "
           f"{config.frames} recorded frames each; device {args.device}, executor {args.executor}", flush=True)
-    t0 = time.perf_counter()
-    state = {"done": 0}
+    ph = rc.phases(config.frames, config.fps)
+    print(f"each scene simulates {sim} frames: {ph['settle_rest']} settling in the rest pose, {ph['lead_in']} leading "
+          f"into the motion's first pose, {ph['settle_pose']} holding it and {ph['ramp']} ramping into the motion, then "
+          f"the {ph['recorded']} that are recorded", flush=True)
+    bars: dict = {}
 
     def progress(kind, done, total, batch):
-        if kind == 0 and (done % 20 == 0 or done == total):  # frames of the current batch
-            print(f"  batch of {batch} scenes: frame {done}/{total}  {time.perf_counter() - t0:.0f} s", flush=True)
-        elif kind == 1:
-            print(f"  scenes done {done}/{total}  {time.perf_counter() - t0:.0f} s", flush=True)
-        state["done"] = done
+        key = "frames" if kind == 0 else "scenes"
+        bar = bars.get(key)
+        # a new batch restarts the frame bar (Ray's tasks run side by side: the bar follows the furthest)
+        if bar is None or bar.total != total or (kind == 0 and done < bar.n and args.executor == "local"):
+            if bar is not None:
+                bar.close()
+            desc = f"batch of {batch} scenes" if kind == 0 else "scenes"
+            bar = bars[key] = tqdm(total=total, desc=desc, unit="frame" if kind == 0 else "scene", file=sys.stdout,
+                                   mininterval=1.0 if sys.stdout.isatty() else 30.0, dynamic_ncols=True)
+        if done > bar.n:
+            bar.update(done - bar.n)
 
-    summary = generate(config, args.out, executor=args.executor, device=args.device, workers=args.workers,
-                       progress=progress)
+    try:
+        summary = generate(config, args.out, executor=args.executor, device=args.device, workers=args.workers,
+                           progress=progress)
+    finally:
+        for bar in bars.values():
+            bar.close()
     if summary["simulated"] == 0 and summary["seconds"] == 0.0:
         print(f"{args.out} is already complete for this config: nothing to do")
     info = store_info(args.out)
@@ -115,7 +134,12 @@ def _cmd_generate(args) -> int:
 def _cmd_validate(args) -> int:
     from datagen.store import validate
 
-    problems = validate(args.store, quick=args.quick)
+    path = Path(args.store)
+    if not path.exists():
+        raise InputError(f"{path} does not exist; give a store directory made by drape generate")
+    problems = validate(path, quick=args.quick)
+    if problems and "is not a drape store" in problems[0]:  # not a store at all: a wrong argument, not damage
+        raise InputError(problems[0].replace("is not a drape store", "is not a drape dataset store"))
     if problems:
         print(f"{args.store}: {len(problems)} problem(s)")
         for p in problems:

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import json
+import math
 import time
 from pathlib import Path
 
@@ -57,6 +58,8 @@ def register(sub, formatter) -> None:
     p.add_argument("--label-map", help="JSON/YAML file: {patterns: {glob: label_name}} (first match wins)")
     p.add_argument("--label-name", help="label of this file (overrides the map)")
     p.add_argument("--allow-unlabelled", action="store_true", help="accept a file no label matches (label -1)")
+    p.add_argument("--new-label", action="store_true",
+                   help="allow a --label-name that is not one of drape's labels (`drape motion list`): a new class")
     p.add_argument("--fps", type=float, help="resample to this frame rate")
     p.add_argument("--up-axis", choices=["y", "z"], help="the file's up axis (default: z for AMASS, y for BVH)")
     p.add_argument("--joint-map", help="BVH only: JSON/YAML {bvh_joint: smpl_joint or null}")
@@ -118,24 +121,62 @@ def _cmd_make(args) -> int:
     return 0
 
 
+_FLAGS = (("label_map (a pattern file)", "--label-map FILE (patterns)"), ("label_map", "--label-map"),
+          ("label_name=...", "--label-name NAME"), ("label_name", "--label-name"),
+          ("allow_unlabelled=True", "--allow-unlabelled"), ("joint_map=", "--joint-map"), ("joint_map", "--joint-map"),
+          ("pass scale=", "pass --scale"), ("scale=", "--scale"), ("the new fps", "--fps"))
+
+
+def _as_flags(message: str) -> str:
+    """A library message with its Python argument names as this command's flags."""
+    for name, flag in _FLAGS:
+        message = message.replace(name, flag)
+    return message
+
+
 def _cmd_import(args) -> int:
+    from datagen.motion.labels import LABELS
+
     path = Path(args.file)
-    suffix = path.suffix.lower()
-    common = {"label_name": args.label_name, "fps": args.fps, "allow_unlabelled": args.allow_unlabelled}
-    if suffix == ".bvh":
-        from datagen.motion.bvh import read_bvh
-
-        motion = read_bvh(path, args.joint_map, scale=args.scale, up_axis=args.up_axis or "y",
-                          label_map=args.label_map, **common)
-    elif suffix == ".npz":
-        if args.joint_map or args.scale:
-            raise InputError("--joint-map and --scale apply to BVH files only; AMASS files are in SMPL joints and metres")
-        from datagen.motion.amass import read_amass
-
-        motion = read_amass(path, args.label_map, up_axis=args.up_axis or "z", **common)
-    else:
-        raise InputError(f"{path}: unknown motion file type {suffix!r}; drape imports AMASS .npz and .bvh files")
     out = Path(args.out)
+    suffix = path.suffix.lower()
+    if not path.is_file():
+        raise InputError(f"{path} does not exist" if not path.exists() else f"{path} is not a file")
+    if out.suffix.lower() != ".npz":
+        raise InputError(f"--out {out}: a drape motion is written as .npz")
+    if not out.parent.is_dir():
+        raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
+    if args.scale is not None and not (math.isfinite(args.scale) and args.scale > 0):
+        raise InputError(f"--scale must be a positive number of metres per file unit, got {args.scale:g}")
+    if args.fps is not None and not (math.isfinite(args.fps) and 1 <= args.fps <= 240):
+        raise InputError(f"--fps must be between 1 and 240 frames per second, got {args.fps:g}")
+    if not (args.label_name or args.label_map or args.allow_unlabelled):
+        raise InputError(f"no label for {path.name}: pass --label-name NAME (one of `drape motion list`), --label-map "
+                         "FILE (patterns to labels), or --allow-unlabelled to read it as label -1")
+    if args.label_name and args.label_name not in LABELS and not args.new_label and not args.label_map:
+        raise InputError(f"--label-name {args.label_name!r} is not one of drape's labels ({', '.join(LABELS)}); pass "
+                         f"--new-label to add it as a new class ({len(LABELS)}), or choose one of them")
+    common = {"label_name": args.label_name, "fps": args.fps, "allow_unlabelled": args.allow_unlabelled}
+    try:
+        if suffix == ".bvh":
+            from datagen.motion.bvh import read_bvh
+
+            motion = read_bvh(path, args.joint_map, scale=args.scale, up_axis=args.up_axis or "y",
+                              label_map=args.label_map, **common)
+        elif suffix == ".npz":
+            if args.joint_map or args.scale:
+                raise InputError("--joint-map and --scale apply to BVH files only; AMASS files are in SMPL joints and "
+                                 "metres")
+            from datagen.motion.amass import read_amass
+
+            motion = read_amass(path, args.label_map, up_axis=args.up_axis or "z", **common)
+        else:
+            raise InputError(f"{path}: unknown motion file type {suffix!r}; drape imports AMASS .npz and .bvh files")
+    except InputError as exc:
+        raise InputError(_as_flags(str(exc))) from None
+    if motion.label_name not in LABELS and motion.label >= 0:
+        print(f"note: {motion.label_name!r} is a new label (class {motion.label}); drape's own are "
+              f"{', '.join(LABELS)}")
     motion.save_npz(out)
     print(f"wrote {out}: {motion.label_name} (class {motion.label}), {motion.frame_count} frames at {motion.fps:g} fps, "
           f"{motion.duration:.2f} s")

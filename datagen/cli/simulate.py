@@ -36,13 +36,11 @@ def register(sub, formatter) -> None:
 
 
 def _cmd_simulate(args) -> int:
-    import warp as wp
-
     from datagen.body.cache import default_body
     from datagen.body.shapes import resolve_betas
     from datagen.garment.types import make_garment
     from datagen.motion.library import make_motion
-    from datagen.sim.scene import RunConfig, Scene, simulate
+    from datagen.sim.scene import RunConfig, Scene, simulate, warp_device
     from datagen.sim.solver import SolverConfig
 
     out = Path(args.out)
@@ -52,10 +50,9 @@ def _cmd_simulate(args) -> int:
         raise InputError(f"the folder {out.parent} does not exist")
     if args.frames < 1:
         raise InputError(f"--frames must be >= 1, got {args.frames}")
-    try:
-        device = str(wp.get_device(args.device))
-    except (RuntimeError, ValueError) as exc:  # warp: unknown or absent device
-        raise InputError(f"warp device {args.device!r} is not available here ({exc}); use --device cpu") from None
+    if not 1 <= args.fps <= 240:
+        raise InputError(f"--fps must be between 1 and 240 frames per second, got {args.fps:g}")
+    device = warp_device(args.device)
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
     garment = make_garment(args.garment, model, betas, seed=args.garment_seed)

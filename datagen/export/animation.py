@@ -133,9 +133,10 @@ def parse_frames(spec: str | None, frame_count: int) -> np.ndarray:
         raise InputError(f"frames must be N or A:B[:step] with integers, got {spec!r}") from None
     if len(parts) == 1:
         k = nums[0]
-        if k is None or not -frame_count <= k < frame_count:
-            raise InputError(f"frame {spec} is out of range: valid frames are 0 .. {frame_count - 1}")
-        return np.array([k % frame_count])
+        if k is None or not 0 <= k < frame_count:
+            raise InputError(f"--frame {spec} is out of range: valid frames are 0 .. {frame_count - 1} (count from 0; "
+                             "negative numbers are not read as from the end)")
+        return np.array([k])
     if len(parts) > 3:
         raise InputError(f"frames must be N or A:B[:step], got {spec!r}")
     a, b = nums[0], nums[1]
@@ -143,7 +144,7 @@ def parse_frames(spec: str | None, frame_count: int) -> np.ndarray:
     if step is not None and step <= 0:
         raise InputError(f"the frame step must be positive, got {step}")
     for v in (a, b):
-        if v is not None and not -frame_count <= v <= frame_count:
+        if v is not None and not 0 <= v <= frame_count:
             raise InputError(f"frames {spec} are out of range: valid frames are 0 .. {frame_count - 1}")
     index = np.arange(frame_count)[slice(a, b, step)]
     if index.size == 0:
@@ -227,13 +228,14 @@ def from_store(store, sample: int, *, frames: np.ndarray | None = None, skeleton
 # ------------------------------------------------------------------------------------- npz
 
 
-def quiet_warp() -> None:
-    """Keep warp's initialisation banner off stdout (it prints on first use; recent warp versions
-    have ``config.log_level``, older ones ``config.quiet``)."""
+def quiet_warp(level: int = 30) -> None:
+    """Keep warp's initialisation banner and per-module load lines off the console: only messages
+    of ``level`` or worse (logging's numbers: 30 warnings, 40 errors) pass. Recent warp versions
+    have ``config.log_level``, older ones ``config.quiet``."""
     import warp as wp
 
     if hasattr(wp.config, "log_level"):
-        wp.config.log_level = max(wp.config.log_level, getattr(wp, "LOG_WARNING", 30))
+        wp.config.log_level = max(wp.config.log_level, level)
     else:
         wp.config.quiet = True
 

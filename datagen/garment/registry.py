@@ -59,6 +59,11 @@ _PIECE_PARAMS = {
 """The style parameters the geometry of each silhouette piece reads."""
 
 
+EDGE_LENGTH_RANGE = (0.004, 0.1)
+"""Target edge lengths a garment can be built at [m]: finer is too many vertices to simulate,
+coarser cannot resolve necklines, cuffs and hems (at 0.5 m the checks fail; at 5 m there is no mesh)."""
+
+
 @dataclass(frozen=True, kw_only=True)
 class GarmentType:
     """One garment type.

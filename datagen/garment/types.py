@@ -27,7 +27,7 @@ from datagen.garment import levelset
 from datagen.materials import Material, material
 from datagen.garment.mesh import GarmentMesh
 from datagen.garment.metadata import GarmentMetadata, Waistband
-from datagen.garment.registry import GARMENT_TYPES, GarmentType, garment_type
+from datagen.garment.registry import EDGE_LENGTH_RANGE, GARMENT_TYPES, GarmentType, garment_type
 from datagen.params import ParamSpec, draw_params
 
 __all__ = ["GARMENT_TYPES", "GarmentType", "MAX_VERTICES", "MIN_CLEARANCE", "ParamSpec", "default_edge_length",
@@ -86,6 +86,7 @@ def _interp(y, ys, vals):
     return np.interp(y, np.asarray(ys)[order], np.asarray(vals)[order])
 
 
+
 def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: dict | None = None,
                  target_edge_length: float | None = None, material_name: str | Material | None = None,
                  grid_spacing: float | None = None) -> GarmentMesh:
@@ -109,8 +110,12 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     mat = material(material_name or spec.material)
     if target_edge_length is None:
         target_edge_length = default_edge_length(kind)
-    if not (np.isfinite(target_edge_length) and target_edge_length > 0):
-        raise InputError(f"target edge length must be a positive number of metres, got {target_edge_length!r}")
+    lo, hi = EDGE_LENGTH_RANGE
+    if not (np.isfinite(target_edge_length) and lo <= target_edge_length <= hi):
+        raise InputError(f"target edge length must be between {lo} and {hi} m (the types' defaults are 13-20 mm; "
+                         f"coarser meshes cannot hold a garment's openings), got {target_edge_length!r}")
+    if int(seed) < 0:
+        raise InputError(f"a garment's seed must be 0 or more, got {seed}")
     betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
     verts = np.asarray(body_model.shaped(betas))[0]
     body = _Body(verts=verts, faces=np.asarray(body_model.faces), joints=np.asarray(body_model.rest_joints(betas))[0])

@@ -30,6 +30,7 @@ from pathlib import Path
 
 from datagen.config import load_config
 from datagen.errors import ConfigError
+from datagen.garment.registry import EDGE_LENGTH_RANGE
 from datagen.sim.scene import RunConfig
 
 BODY_PRESETS = ("thin", "regular", "fat")
@@ -93,7 +94,8 @@ class DatasetConfig:
     fps: float = field(default=30.0, metadata={"min": 1.0, "max": 240.0})
     frames: int = field(default=60, metadata={"min": 1, "max": 100000})
     segment_length: int = field(default=60, metadata={"min": 1, "max": 100000})
-    garment_edge_length: float | None = field(default=None, metadata={"min": 0.004, "max": 0.2})
+    garment_edge_length: float | None = field(default=None, metadata={"min": EDGE_LENGTH_RANGE[0],
+                                                                      "max": EDGE_LENGTH_RANGE[1]})
     fit_attribute: bool = True
     split_disjoint: tuple[str, ...] = DISJOINT_KINDS
     simulation: SimulationConfig = field(default_factory=SimulationConfig)
@@ -124,6 +126,8 @@ def _parse_pair(text: str, what: str, names: tuple[str, ...]) -> tuple[str, int]
     name, sep, seed = text.partition(":")
     if not sep or not seed.lstrip("-").isdigit():
         raise ConfigError(f"{what} {text!r} must be written name:seed, e.g. '{names[0]}:0'")
+    if seed.startswith("-"):
+        raise ConfigError(f"{what} {text!r}: the seed must be 0 or more")
     if name not in names:
         raise ConfigError(f"unknown {what} {name!r} in {text!r}; choose from: {', '.join(names)}")
     return name, int(seed)

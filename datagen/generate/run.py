@@ -20,11 +20,12 @@ the run resumes with the missing ones; a store made from another config is refus
 from __future__ import annotations
 
 import logging
+import shutil
 import time
 from pathlib import Path
 
 from datagen.errors import InputError
-from datagen.generate.config import DatasetConfig
+from datagen.generate.config import DatasetConfig, parse_garment
 from datagen.generate.plan import Plan, open_writer, static_groups
 from datagen.generate.samples import default_workers, simulate_samples
 
@@ -54,22 +55,89 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
     """
     if executor not in ("local", "ray"):
         raise InputError(f"unknown executor {executor!r}; use local or ray")
+    plan = Plan(config)
+    preflight(plan, out, executor=executor, device=device, workers=workers)
     cluster = None
     if executor == "ray":  # Ray installed and the cluster fit for the device, before anything is written
         from datagen.generate.ray_executor import RayCluster
 
         cluster = RayCluster(device, workers)
     try:
-        return _generate(config, out, executor, device, workers, progress, cluster)
+        return _generate(plan, out, executor, device, workers, progress, cluster)
     finally:
         if cluster is not None:
             cluster.close()
 
 
-def _generate(config, out, executor, device, workers, progress, cluster) -> dict:
-    plan = Plan(config)
+BODY_BYTES_PER_VERTEX_FRAME = 48
+"""Host memory of one posed body vertex in one simulated frame while a batch is set up: the posed
+body frames in float64 and their float32 upload (3 x 8 + 3 x 8 bytes)."""
+
+DISK_BYTES_PER_VERTEX_FRAME = 36
+"""Disk one recorded garment vertex-frame takes at the peak of a run: staged uncompressed (two int32
+3-vectors: detail and coarse, 24 bytes) while pack writes the compressed store (about 11 bytes
+measured, 43.4 KiB per 4k-vertex garment-frame), rounded up."""
+
+NOMINAL_GARMENT_VERTICES = 4_000
+"""Vertices of a garment at its type's default edge length, for the disk estimate (the
+default-resolution garments have 2.5-4k)."""
+
+
+def simulated_frames(plan) -> int:
+    """Frames a scene of ``plan`` simulates: settling in the rest pose, the lead-in, holding the first
+    pose, the ramp and the recorded frames."""
+    return sum(plan.run_config.phases(plan.config.frames, plan.config.fps).values())
+
+
+def preflight(plan, out: str | Path, *, executor: str, device: str | None, workers: int | None) -> None:
+    """Everything that can be checked before the store directory is created: the output path, the
+    worker count, the device (local executor), host memory for a batch and disk for the run.
+
+    Raises:
+        InputError: with what is wrong, the figures, and what to do.
+    """
+    out = Path(out)
+    if workers is not None and workers < 0:
+        raise InputError(f"--workers must be 0 or more, got {workers}")
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} is a file; give a directory for the store")
+    if executor == "local":
+        from datagen.sim.scene import warp_device
+
+        warp_device(device)
+    c = plan.config
+    batch = min(c.simulation.batch_size, plan.sample_count)
+    frames = simulated_frames(plan)
+    body_vertices = int(plan.body_model.v_template.shape[0])
+    need = batch * frames * body_vertices * BODY_BYTES_PER_VERTEX_FRAME
+    from datagen.sim.scene import available_ram
+
+    free = available_ram()
+    if executor == "local" and free is not None and need > free:
+        raise InputError(f"a batch of {batch} scenes of {frames} simulated frames needs about {need / 2**30:,.1f} GiB "
+                         f"of memory for the posed bodies alone, and this machine has {free / 2**30:,.1f} GiB "
+                         "available; lower frames or simulation.batch_size in the config")
+    edge_scale = 1.0
+    if c.garment_edge_length is not None:
+        from datagen.garment.types import GARMENT_TYPES
+
+        kinds = {parse_garment(g)[0] for s in c.splits.values() for g in s.garments}
+        default = min(GARMENT_TYPES[k].edge_length for k in kinds)
+        edge_scale = (default / c.garment_edge_length) ** 2
+    disk = plan.sample_count * c.frames * NOMINAL_GARMENT_VERTICES * edge_scale * DISK_BYTES_PER_VERTEX_FRAME
+    where = out if out.exists() else next((p for p in out.absolute().parents if p.exists()), Path("/"))
+    disk_free = shutil.disk_usage(where).free
+    if disk > disk_free:
+        raise InputError(f"this dataset needs about {disk / 2**30:,.1f} GiB of disk while it is made (staged samples "
+                         f"and the packed store; {plan.sample_count} scenes x {c.frames} frames), and {where} has "
+                         f"{disk_free / 2**30:,.1f} GiB free; free some space or give --out on a larger disk")
+
+
+def _generate(plan, out, executor, device, workers, progress, cluster) -> dict:
+    config = plan.config
     writer = open_writer(plan, out)
     if writer.is_complete:
+        writer.pack()  # nothing to pack; removes what an interrupted cleanup left in staging/
         return {"samples": plan.sample_count, "simulated": 0, "seconds": 0.0, "complete": True}
     t0 = time.perf_counter()
     if writer.missing_static():

@@ -15,6 +15,7 @@ Both give the same store: a sample is a pure function of its scene.
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import multiprocessing
 import os
@@ -96,6 +97,11 @@ def _init_worker(config, out: str) -> None:
 
     # one BLAS thread per worker: the workers themselves are the parallelism
     os.environ.setdefault("OMP_NUM_THREADS", "1")
+    if logging.getLogger().level > logging.DEBUG:  # warp's banner and compile lines once, from the main process
+        with contextlib.suppress(ImportError):
+            import warp as wp
+
+            wp.config.log_level = max(getattr(wp.config, "log_level", 0), logging.ERROR)
     plan = Plan(config)
     _WORKER.update(plan=plan, writer=open_writer(plan, out))
 

@@ -93,6 +93,11 @@ _EXTREMITIES = frozenset({"head", "left_wrist", "right_wrist", "left_hand", "rig
 """SMPL joints below whose mapped BVH joint unknown leaf joints (fingers, toes) are ignored."""
 
 
+LIMB_JOINTS = ("left_hip", "right_hip", "left_knee", "right_knee", "left_ankle", "right_ankle", "left_shoulder",
+               "right_shoulder", "left_elbow", "right_elbow", "left_wrist", "right_wrist")
+"""SMPL joints a BVH must drive: without them an arm or leg would hang stiffly from its parent."""
+
+
 def _sided(pairs: dict[str, str | None]) -> dict[str, str | None]:
     """Expand ``{"{S}Arm": "{s}_shoulder"}`` to the Left/left and Right/right entries."""
     out: dict[str, str | None] = {}
@@ -384,6 +389,11 @@ def _resolve_joint_map(skel: _Skeleton, joint_map: dict[str, str | None] | str |
     if 0 not in smpl_to_bvh:
         raise InputError(f"no joint of BVH file {path!r} maps to SMPL's 'pelvis' (the root); map the hips joint to "
                          "\"pelvis\" in the joint map")
+    missing = [n for n in LIMB_JOINTS if SMPL_JOINT_NAMES.index(n) not in smpl_to_bvh]
+    if missing:  # a limb without its joints would be carried stiffly by its parent: refuse, do not guess
+        raise InputError(f"BVH file {path!r} has no joint for SMPL's {', '.join(missing)}: every hip, knee, ankle, "
+                         "shoulder, elbow and wrist must come from the file (feet, hands, collars and extra spine "
+                         "joints may be missing). If they are there under other names, map them with a joint map")
     # Each mapped joint must lie below the BVH joint of its nearest mapped SMPL ancestor.
     for k, b in smpl_to_bvh.items():
         a = SMPL_PARENTS[k]

@@ -74,6 +74,14 @@ class RunConfig:
         (the one place this is worked out: generate, ``drape simulate`` and the benchmarks ask)."""
         return int(recorded) + self.ramp_frames(fps)[1]
 
+    def phases(self, recorded: int, fps: float) -> dict[str, int]:
+        """Simulated frames of each phase of a scene recording ``recorded`` frames (as
+        :func:`frame_schedule` runs them): ``settle_rest``, ``lead_in``, ``settle_pose``, ``ramp``
+        (its last frame is the first recorded one, so not counted here) and ``recorded``."""
+        ramp, _ = self.ramp_frames(fps)
+        return {"settle_rest": self.settle_rest, "lead_in": int(round(self.lead_in * fps)),
+                "settle_pose": self.settle_pose, "ramp": max(ramp - 1, 0), "recorded": int(recorded)}
+
     def as_dict(self) -> dict:
         return asdict(self)
 
@@ -274,6 +282,20 @@ _MEMORY_ADVICE = ("Simulate fewer scenes at once (the dataset config's simulatio
                   "(a larger garment_edge_length) or use a device with more memory.")
 
 
+def warp_device(device: str | None) -> str:
+    """warp's name for ``device`` (``cpu``, ``cuda``, ``cuda:N``), or an :class:`InputError` that says
+    what is wrong and what to do (a CUDA device on a machine without one, a name warp does not know)."""
+    import warp as wp
+
+    try:
+        return str(wp.get_device(device))
+    except (RuntimeError, ValueError) as exc:  # warp: unknown or absent device
+        if str(device).startswith("cuda"):
+            raise InputError(f"--device {device}: no CUDA device is usable here (warp: {exc}); use --device cpu, or run "
+                             "on a machine with an NVIDIA GPU and driver") from None
+        raise InputError(f"--device {device!r} is not a warp device; use cpu or cuda (cuda:N)") from None
+
+
 def device_free_bytes(device: str | None) -> int | None:
     """Free memory of ``device`` [bytes]: a CUDA device's free memory, the CPU's available RAM;
     None when it cannot be told."""
@@ -282,6 +304,11 @@ def device_free_bytes(device: str | None) -> int | None:
     dev = wp.get_device(device)
     if dev.is_cuda:
         return int(dev.free_memory)
+    return available_ram()
+
+
+def available_ram() -> int | None:
+    """Host memory that can be had without swapping [bytes]; None when it cannot be told."""
     try:  # Linux: what can be had without swapping (page cache that can be dropped included)
         with open("/proc/meminfo") as fh:
             for line in fh:

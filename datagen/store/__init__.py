@@ -3,7 +3,7 @@
 - :class:`StoreWriter` (``writer``): create or reopen a store, stage samples and static groups
   crash-safely from any number of processes, then :meth:`~StoreWriter.pack` it in one.
 - :func:`open_store` (``reader``): samples, frames, segments, garment meshes, body and fit models.
-- :func:`validate` (``validate``): every problem of a packed store, as messages.
+- :func:`validate` (``validation``): every problem of a packed store, as messages.
 - :func:`store_info` / :func:`format_store_info` (``info``): counts, sizes on disk, failures
   (plots of a store: :func:`datagen.export.plots.plot_store_info`).
 
@@ -23,7 +23,7 @@ _EXPORTS = {
     "StorageError": "layout",
     "SAMPLE_ARRAYS": "writer", "SAMPLE_SCALARS": "writer", "StoreWriter": "writer", "check_sample": "writer",
     "check_static": "writer",
-    "validate": "validate",
+    "validate": "validation",
     "format_store_info": "info", "store_info": "info",
 }
 

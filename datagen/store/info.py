@@ -91,7 +91,7 @@ def store_info(path: str | Path) -> dict[str, Any]:
     per_frame = sum(sizes.get(g, {}).get("on_disk", 0) for g in ("vertex_frames", "frames"))
     info["bytes_per_garment_frame"] = per_frame / frames if frames else None
     info["fit"] = {"fitted": attrs.get("fit_attribute"), **(attrs.get("fit_diagnostics") or {})}
-    from datagen.store.validate import file_problems
+    from datagen.store.validation import file_problems
 
     info["damage"] = file_problems(path, attrs, meta, quick=True)[0]  # missing shard files (cheap)
     ff = idx["failure_frame"]

@@ -9,6 +9,7 @@ import errno
 import json
 import math
 import os
+import shutil
 import uuid
 from collections.abc import Iterator
 from pathlib import Path
@@ -218,7 +219,12 @@ def storage_errors(store: Path, action: str, after: str) -> Iterator[None]:
         reason = _DISK_ERRNOS.get(exc.errno or -1, exc.strerror or type(exc).__name__)
         where = f" ({exc.filename})" if getattr(exc, "filename", None) else ""
         if exc.errno in (errno.ENOSPC, errno.EDQUOT):
-            hint = "free space on that disk (or give a store path on another disk) and run again"
+            free = ""
+            with contextlib.suppress(OSError):
+                free = f" ({shutil.disk_usage(store if store.exists() else store.parent).free / 2**20:,.0f} MiB free now)"
+            reason = f"the disk is full{free}"
+            hint = ("free space on that disk (drape generate estimates what a whole run needs before it starts) and run "
+                    "the same command again: it resumes from what is already staged")
         elif exc.errno in (errno.EROFS, errno.EACCES, errno.EPERM):
             hint = "make the directory writable for this user (or give another store path) and run again"
         else:

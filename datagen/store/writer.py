@@ -58,7 +58,7 @@ from datagen.store.layout import (
     write_json_atomic,
 )
 from datagen.geometry.positions import encode_positions
-from datagen.store.validate import Dimensions, value_problems
+from datagen.store.validation import Dimensions, value_problems
 from schemas.dataset import (
     ARRAYS,
     COMPRESSION,

@@ -6,6 +6,7 @@ local one. Marked slow: each generation simulates five scenes on the CPU (about 
 from __future__ import annotations
 
 import os
+import shutil
 import signal
 import subprocess
 import sys
@@ -132,6 +133,20 @@ def test_finished_store_is_left_alone_and_other_config_refused(local_store):
         generate(micro(frames=7), local_store)
     after = {p: p.stat().st_mtime_ns for p in local_store.rglob("*") if p.is_file()}
     assert before == after
+
+
+def test_a_rerun_removes_what_an_interrupted_cleanup_left(local_store, tmp_path):
+    """Ctrl-C after pack marked the store complete but before staging/ was removed: the same command
+    run again removes the leftovers and changes nothing else."""
+    from datagen.store.layout import STAGING
+
+    store = tmp_path / "copy.zarr"
+    shutil.copytree(local_store, store)
+    (store / STAGING / "sample-000000001").mkdir(parents=True)
+    (store / STAGING / "sample-000000001" / "detail.npy").write_bytes(b"x" * 1000)
+    assert generate(micro(), store)["simulated"] == 0
+    assert not (store / STAGING).exists() and validate(store) == []
+    assert_same_store(local_store, store, skip=())
 
 
 def test_kill_and_resume_gives_the_same_store(local_store, tmp_path):

@@ -57,3 +57,14 @@ def test_a_batch_too_large_for_the_device_is_refused_before_anything_is_allocate
     assert "a batch of 2 scenes (largest garment 400 vertices) needs about 2 MiB" in msg and "1 MiB free" in msg
     assert "simulation.batch_size" in msg and "garment_edge_length" in msg
     assert built == []
+
+
+def test_phases_count_the_frames_the_schedule_simulates():
+    from datagen.sim.scene import RunConfig, frame_schedule
+
+    for rc, fps, recorded in ((RunConfig(), 30.0, 60), (RunConfig(settle_rest=10, settle_pose=5, ramp=0.5), 30.0, 60),
+                              (RunConfig(), 24.0, 7)):
+        lead = round(rc.lead_in * fps)
+        schedule, first = frame_schedule(rc, lead, lead + rc.motion_frames(recorded, fps), fps)
+        phases = rc.phases(recorded, fps)
+        assert sum(phases.values()) == len(schedule) and first == len(schedule) - recorded, (phases, len(schedule))

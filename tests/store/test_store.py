@@ -630,6 +630,7 @@ def test_full_disk_gives_a_clear_error_and_keeps_what_was_stored(tmp_path, monke
         writer.stage_sample(7, *sl.sample(7))
     assert "could not stage sample-000000007" in str(exc.value) and "the disk is full" in str(exc.value)
     assert "free space" in str(exc.value) and exc.value.errno == errno.ENOSPC
+    assert "MiB free now" in str(exc.value) and "resumes from what is already staged" in str(exc.value)
     assert snapshot(path) == before and writer.missing() == [7]
     monkeypatch.setattr(w, "_save_npy", real_save)
     assert writer.stage_sample(7, *sl.sample(7))
@@ -657,7 +658,7 @@ def test_reading_a_store_loads_the_reader_alone():
             "print(sorted(m for m in sys.modules if m.startswith('datagen') or m in ('fcntl', 'torch')))")
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert "datagen.store.reader" in loaded
-    for heavy in ("datagen.store.writer", "datagen.store.validate", "datagen.store.info", "'fcntl'", "'torch'",
+    for heavy in ("datagen.store.writer", "datagen.store.validation", "datagen.store.info", "'fcntl'", "'torch'",
                   "datagen.geometry.features", "datagen.sim",
                   "datagen.garment", "datagen.body"):
         assert heavy not in loaded, (heavy, loaded)

@@ -210,8 +210,9 @@ def validate(path: str | Path, *, check_values: bool = True, quick: bool = False
         return [f"{path} is not a drape store: root attribute 'format' is {attrs.get('format')!r}, "
                 f"not {STORE_FORMAT!r}"]
     if attrs.get("complete") is not True:
-        problems.append("store is not marked complete (root attribute 'complete' is not true): pack() has not "
-                        "finished; run the writer's pack() again")
+        problems.append("store is not marked complete (root attribute 'complete' is not true): its generation or "
+                        "pack was interrupted; run the same `drape generate` command again (it resumes from the "
+                        "staged samples and packs; `drape info STORE --config > config.yaml` recovers the config)")
     if attrs.get("schema_version") != DATASET_SCHEMA_VERSION:  # another layout: its arrays mean other things
         from datagen.store.reader import version_problem
 

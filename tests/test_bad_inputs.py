@@ -1,0 +1,270 @@
+"""A corpus of bad inputs to every command, as a new user makes them: each gets one line that says
+what is wrong and what to do (``error: ...``, exit status 2; a store that fails validation gets its
+report and exit status 1), never a traceback, and leaves nothing half written.
+
+The commands run in this process (``datagen.cli.main``), so an exception that escapes is a test
+failure with its traceback. Inputs are made once per module: BVH files (a skeleton in metres
+without its left arm below the shoulder, one without a left leg, one that is not BVH), garbage
+``.npz`` files, a config with each kind of mistake, and a small synthetic store (complete, and one
+interrupted before pack).
+"""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from tests.motion.test_bvh import cmu_skeleton, write_bvh_text
+from tests.store import stage_loop as sl
+
+MICRO = {
+    "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07,
+    "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
+                   "solver": {"substeps": 3, "iterations": 3}},
+    "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
+    "test": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},
+}
+
+
+def _bvh(path: Path, drop: tuple[str, ...] = (), scale: float = 1.0) -> Path:
+    joints = [j for j in cmu_skeleton() if not any(j[0].startswith(d) for d in drop)]
+    names = {j[0] for j in joints}
+    joints = [j for j in joints if j[1] is None or j[1] in names]
+    T = 4
+    rotations = {name: np.zeros((T, 3)) for name, *_ in joints}
+    positions = np.stack([np.linspace(0, 1, T), np.full(T, 17.0), np.zeros(T)], axis=1)
+    write_bvh_text(path, joints, rotations, positions, scale=scale)
+    return path
+
+
+@pytest.fixture(scope="module")
+def inputs(tmp_path_factory):
+    d = tmp_path_factory.mktemp("bad")
+    # CMU units are 0.0254/0.45 m: scaled so that the file is in metres (about 1.6 m tall)
+    metres = 0.0254 / 0.45
+    _bvh(d / "no_left_arm.bvh", drop=("LeftForeArm", "LeftHand", "LeftFingerBase", "LThumb", "LeftHandIndex1"),
+         scale=metres)
+    _bvh(d / "no_left_leg.bvh", drop=("LeftUpLeg", "LeftLeg", "LeftFoot", "LeftToeBase"), scale=metres)
+    _bvh(d / "good.bvh", scale=metres)
+    (d / "garbage.bvh").write_text("this is not a BVH file\n")
+    (d / "garbage.npz").write_bytes(b"PK\x03\x04 definitely not a zip archive")
+    np.savez(d / "wrong_pose.npz", something=np.zeros(3))
+    (d / "configs").mkdir()
+    for name, change in {
+        "negative_seed": {"train": {**MICRO["train"], "garments": ["tshirt:-1", "pants:0"]}},
+        "huge_frames": {"frames": 100000},
+        "one_pair": {"train": {**MICRO["train"], "bodies": ["regular"], "garments": ["tshirt:0"]}},
+        "unknown_key": {"framez": 6},
+        "bad_motion_seed": {"train": {**MICRO["train"], "motions": ["walk:-3"]}},
+        "zero_batch": {"simulation": {**MICRO["simulation"], "batch_size": 0}},
+    }.items():
+        (d / "configs" / f"{name}.json").write_text(json.dumps({**MICRO, **change}))
+    (d / "configs" / "micro.json").write_text(json.dumps(MICRO))
+    (d / "configs" / "broken.yaml").write_text("frames: [1, 2\n")
+    store = d / "store"
+    writer = sl.open_writer(store, 12, durable=False)
+    sl.stage_all(writer)
+    writer.pack()
+    half = d / "half"
+    writer = sl.open_writer(half, 12, durable=False)
+    sl.stage_all(writer)
+    (d / "not_a_store").mkdir()
+    (d / "not_a_store" / "notes.txt").write_text("mine")
+    (d / "run").mkdir()
+    return d
+
+
+# (id, argv with IN for the inputs directory and OUT for a fresh output directory, exit status,
+#  words the message must hold, paths under OUT that must not exist afterwards)
+CASES = [
+    # --- generate: checked before anything is created
+    ("generate-cuda-absent", ["generate", "IN/configs/micro.json", "--out", "OUT/s.zarr", "--device", "cuda"], 2,
+     ["no CUDA device", "--device cpu"], ["s.zarr"]),
+    ("generate-device-typo", ["generate", "IN/configs/micro.json", "--out", "OUT/s.zarr", "--device", "gpu"], 2,
+     ["--device", "cpu or cuda"], ["s.zarr"]),
+    ("generate-negative-garment-seed", ["generate", "IN/configs/negative_seed.json", "--out", "OUT/s.zarr"], 2,
+     ["tshirt:-1", "seed"], ["s.zarr"]),
+    ("generate-negative-motion-seed", ["generate", "IN/configs/bad_motion_seed.json", "--out", "OUT/s.zarr"], 2,
+     ["walk:-3", "seed"], ["s.zarr"]),
+    ("generate-huge-frames", ["generate", "IN/configs/huge_frames.json", "--out", "OUT/s.zarr"], 2,
+     ["frames"], ["s.zarr"]),
+    ("generate-too-few-pairs", ["generate", "IN/configs/one_pair.json", "--out", "OUT/s.zarr"], 2,
+     ["train split", "pairs", "fit_attribute"], ["s.zarr"]),
+    ("generate-unknown-key", ["generate", "IN/configs/unknown_key.json", "--out", "OUT/s.zarr"], 2,
+     ["framez"], ["s.zarr"]),
+    ("generate-zero-batch", ["generate", "IN/configs/zero_batch.json", "--out", "OUT/s.zarr"], 2,
+     ["batch_size"], ["s.zarr"]),
+    ("generate-broken-yaml", ["generate", "IN/configs/broken.yaml", "--out", "OUT/s.zarr"], 2,
+     ["broken.yaml"], ["s.zarr"]),
+    ("generate-missing-config", ["generate", "IN/configs/none.toml", "--out", "OUT/s.zarr"], 2,
+     ["none.toml", "does not exist"], ["s.zarr"]),
+    ("generate-unknown-preset", ["generate", "--preset", "huge", "--out", "OUT/s.zarr"], 2,
+     ["unknown preset", "tiny"], ["s.zarr"]),
+    ("generate-negative-workers", ["generate", "IN/configs/micro.json", "--out", "OUT/s.zarr", "--workers", "-1"], 2,
+     ["--workers"], ["s.zarr"]),
+    ("generate-into-foreign-directory", ["generate", "IN/configs/micro.json", "--out", "IN/not_a_store"], 2,
+     ["not_a_store", "not a drape"], []),
+    ("generate-into-a-file", ["generate", "IN/configs/micro.json", "--out", "IN/good.bvh"], 2,
+     ["good.bvh"], []),
+    # --- validate, info
+    ("validate-missing", ["validate", "OUT/none.zarr"], 2, ["none.zarr", "does not exist"], []),
+    ("validate-interrupted", ["validate", "IN/half"], 1, ["drape generate", "again"], []),
+    ("validate-foreign", ["validate", "IN/not_a_store"], 2, ["not a drape dataset store"], []),
+    ("info-foreign", ["info", "IN/not_a_store"], 2, ["not a drape dataset store"], []),
+    ("info-a-file", ["info", "IN/good.bvh"], 2, ["good.bvh"], []),
+    # --- garment make
+    ("garment-missing-dir", ["garment", "make", "--type", "tshirt", "--out", "OUT/none/t.obj"], 2,
+     ["does not exist"], ["none"]),
+    ("garment-unknown-type", ["garment", "make", "--type", "gown", "--out", "OUT/g.obj"], 2,
+     ["unknown garment", "gown"], ["g.obj"]),
+    ("garment-edge-huge", ["garment", "make", "--type", "tshirt", "--edge-length", "5", "--out", "OUT/t.obj"], 2,
+     ["--edge-length"], ["t.obj"]),
+    ("garment-edge-coarse", ["garment", "make", "--type", "tshirt", "--edge-length", "0.5", "--out", "OUT/t.obj"], 2,
+     ["--edge-length"], ["t.obj"]),
+    ("garment-edge-negative", ["garment", "make", "--type", "tshirt", "--edge-length", "-0.01", "--out", "OUT/t.obj"],
+     2, ["--edge-length"], ["t.obj"]),
+    ("garment-negative-seed", ["garment", "make", "--type", "tshirt", "--seed", "-1", "--out", "OUT/t.obj"], 2,
+     ["--seed"], ["t.obj"]),
+    ("garment-bad-param", ["garment", "make", "--type", "tshirt", "--param", "sleeve=abc", "--out", "OUT/t.obj"], 2,
+     ["sleeve"], ["t.obj"]),
+    ("garment-unknown-material", ["garment", "make", "--type", "tshirt", "--material", "kevlar", "--out", "OUT/t.obj"],
+     2, ["kevlar"], ["t.obj"]),
+    ("garment-bad-format", ["garment", "make", "--type", "tshirt", "--out", "OUT/t.xyz"], 2, ["xyz"], ["t.xyz"]),
+    # --- motion import
+    ("bvh-missing-arm", ["motion", "import", "IN/no_left_arm.bvh", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
+     ["left_elbow", "no joint"], ["m.npz"]),
+    ("bvh-missing-leg", ["motion", "import", "IN/no_left_leg.bvh", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
+     ["left_knee"], ["m.npz"]),
+    ("bvh-garbage", ["motion", "import", "IN/garbage.bvh", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
+     ["garbage.bvh"], ["m.npz"]),
+    ("bvh-missing-file", ["motion", "import", "IN/none.bvh", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
+     ["none.bvh", "does not exist"], ["m.npz"]),
+    ("bvh-unlabelled", ["motion", "import", "IN/good.bvh", "--out", "OUT/m.npz"], 2,
+     ["--label-name", "--allow-unlabelled"], ["m.npz"]),
+    ("bvh-new-label", ["motion", "import", "IN/good.bvh", "--label-name", "moonwalk", "--out", "OUT/m.npz"], 2,
+     ["moonwalk", "--new-label"], ["m.npz"]),
+    ("bvh-bad-scale", ["motion", "import", "IN/good.bvh", "--label-name", "walk", "--scale", "-1", "--out",
+                       "OUT/m.npz"], 2, ["--scale"], ["m.npz"]),
+    ("bvh-bad-fps", ["motion", "import", "IN/good.bvh", "--label-name", "walk", "--fps", "0", "--out", "OUT/m.npz"], 2,
+     ["--fps"], ["m.npz"]),
+    ("amass-garbage", ["motion", "import", "IN/garbage.npz", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
+     ["garbage.npz"], ["m.npz"]),
+    ("motion-make-unknown-label", ["motion", "make", "--label", "moonwalk", "--out", "OUT/m.npz"], 2,
+     ["moonwalk"], ["m.npz"]),
+    # --- simulate, preview, body export
+    ("simulate-negative-fps", ["simulate", "--fps", "-30", "--out", "OUT/r.npz"], 2, ["--fps"], ["r.npz"]),
+    ("simulate-zero-frames", ["simulate", "--frames", "0", "--out", "OUT/r.npz"], 2, ["--frames"], ["r.npz"]),
+    ("simulate-cuda-absent", ["simulate", "--device", "cuda", "--frames", "2", "--out", "OUT/r.npz"], 2,
+     ["no CUDA device"], ["r.npz"]),
+    ("simulate-unknown-motion", ["simulate", "--motion", "moonwalk", "--out", "OUT/r.npz"], 2, ["moonwalk"],
+     ["r.npz"]),
+    ("preview-negative-frame", ["preview", "IN/store", "--sample", "0", "--frame", "-1", "--out", "OUT/p.png"], 2,
+     ["--frame"], ["p.png"]),
+    ("preview-sample-out-of-range", ["preview", "IN/store", "--sample", "999", "--out", "OUT/p.png"], 2,
+     ["999"], ["p.png"]),
+    ("body-export-garbage-pose", ["body", "export", "--pose", "IN/garbage.npz", "--out", "OUT/b.obj"], 2,
+     ["garbage.npz", "not"], ["b.obj"]),
+    ("body-export-pose-without-poses", ["body", "export", "--pose", "IN/wrong_pose.npz", "--out", "OUT/b.obj"], 2,
+     ["wrong_pose.npz"], ["b.obj"]),
+    # --- export, train, evaluate, predict
+    ("export-sample-out-of-range", ["export", "usd", "IN/store", "--sample", "999", "--out", "OUT/a.usda"], 2,
+     ["999"], ["a.usda"]),
+    ("train-foreign-store", ["train", "gnn", "--data", "IN/not_a_store", "--out", "OUT/run"], 2,
+     ["not a drape dataset store"], ["run"]),
+    ("train-zero-epochs", ["train", "gnn", "--data", "IN/store", "--out", "OUT/run", "--epochs", "0"], 2,
+     ["epochs"], ["run"]),
+    ("train-unknown-ablation", ["train", "gnn", "--data", "IN/store", "--out", "OUT/run", "--ablation", "nope"], 2,
+     ["nope"], ["run"]),
+    ("evaluate-not-a-run", ["evaluate", "IN/not_a_store"], 2, ["not a drape run directory"], []),
+    ("predict-not-a-run", ["predict", "IN/run", "--data", "IN/store", "--sample", "0", "--out", "OUT/p.usda"], 2,
+     ["not a drape run directory"], ["p.usda"]),
+]
+
+
+@pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
+def test_bad_input_gets_one_clear_line(case, inputs, tmp_path, capsys, monkeypatch):
+    from datagen.cli import main
+
+    _name, argv, status, words, absent = case
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "")  # no GPU here, whatever the machine has
+    argv = [a.replace("IN", str(inputs)).replace("OUT", str(tmp_path)) for a in argv]
+    before = sorted(p.name for p in tmp_path.iterdir())
+    try:
+        code = main(argv)
+    except SystemExit as exc:  # argparse's own usage errors
+        code = exc.code
+    captured = capsys.readouterr()
+    err = captured.err
+    assert "Traceback" not in err
+    assert code == status, err[-1500:]
+    if status == 2:
+        lines = [ln for ln in err.splitlines() if "error:" in ln]
+        assert len(lines) == 1, err[-1500:]
+        message = lines[0]
+    else:  # a validation report, printed
+        message = captured.out + err
+    for w in words:
+        assert w.lower() in message.lower(), (w, message)
+    for rel in absent:
+        assert not (tmp_path / rel).exists(), f"{rel} was left behind"
+    assert sorted(p.name for p in tmp_path.iterdir()) == before or absent == []
+
+
+def test_the_corpus_is_large_enough():
+    assert len(CASES) >= 40
+
+
+def test_ray_missing_is_refused_before_the_store_is_created(inputs, tmp_path, capsys, monkeypatch):
+    import sys
+
+    from datagen.cli import main
+
+    monkeypatch.setitem(sys.modules, "ray", None)  # `import ray` fails as if Ray were not installed
+    code = main(["generate", str(inputs / "configs" / "micro.json"), "--out", str(tmp_path / "s.zarr"),
+                 "--executor", "ray"])
+    err = capsys.readouterr().err
+    assert code == 2 and "pip install 'drape[ray]'" in err and "Traceback" not in err
+    assert not (tmp_path / "s.zarr").exists()
+
+
+def test_a_garment_that_fails_its_checks_is_not_written(tmp_path, capsys, monkeypatch, default_body):
+    import datagen.garment.checks as checks
+    from datagen.cli import main
+
+    real = checks.check_garment
+
+    def failing(*a, **k):
+        return {**real(*a, **k), "ok": False, "failures": ["an opening is not a single loop (made up by this test)"]}
+
+    monkeypatch.setattr(checks, "check_garment", failing)
+    out = tmp_path / "t.obj"
+    code = main(["garment", "make", "--type", "skirt", "--edge-length", "0.05", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and "fails its checks" in err and "nothing was written" in err and "made up by this test" in err
+    assert not out.exists()
+
+
+def test_ctrl_c_says_how_to_resume(monkeypatch, capsys, tmp_path):
+    import datagen.generate.run as run
+    from datagen.cli import main
+
+    def interrupted(*a, **k):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(run, "generate", interrupted)
+    code = main(["generate", "--preset", "tiny", "--out", str(tmp_path / "t.zarr")])
+    err = capsys.readouterr().err
+    assert code == 130 and "interrupted" in err and "run the same command again" in err and "resumes" in err
+
+
+def test_beta_far_outside_the_population_warns(tmp_path, capsys, caplog, default_body):
+    from datagen.cli import main
+
+    out = tmp_path / "b.obj"
+    with caplog.at_level("WARNING"):
+        assert main(["body", "export", "--betas", "1000", "--out", str(out)]) == 0
+    assert "beyond ±3" in caplog.text and "β[0]" in caplog.text and out.exists()
