@@ -105,8 +105,9 @@ class FrameDataset(torch.utils.data.Dataset):
 
 
 class SegmentDataset(torch.utils.data.Dataset):
-    """Segments of one split (paper 001): ``pose`` [T, 24, 3], ``trans`` [T, 3], ``label`` [T] and,
-    with ``garment=True``, ``detail`` [T, V, 3] and the garment index (one template per type)."""
+    """Segments of one split (paper 001): ``pose`` [T, 24, 3], ``trans`` [T, 3], ``label`` [T], the
+    sample's ``garment``, ``body`` and ``sample`` indices, and any other frame arrays in ``names``
+    (e.g. ``detail`` [T, V, 3])."""
 
     def __init__(self, store: str | Path | DatasetStore, split: str, *, names: Sequence[str] = ("pose", "trans",
                                                                                                  "label")):
@@ -124,5 +125,6 @@ class SegmentDataset(torch.utils.data.Dataset):
         s = self.store.segment(int(self.segments[k]), names=self.names)
         out = {n: torch.from_numpy(np.ascontiguousarray(s[n])) for n in self.names}
         out["garment"] = torch.tensor(int(s["garment"]))
+        out["body"] = torch.tensor(int(s["body"]))
         out["sample"] = torch.tensor(int(s["sample"]))
         return out

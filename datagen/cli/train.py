@@ -26,6 +26,36 @@ def register(sub, formatter) -> None:
     g.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
     g.add_argument("--force", action="store_true", help="replace the run in --out")
     g.set_defaults(func=_cmd_train_gnn)
+    m = models.add_parser("motion", formatter_class=formatter, help="paper 001's Transformer-CVAE motion generator",
+                          description="Train paper 001's label-conditioned motion generator (§3.2) on a store's "
+                          "labelled 60-frame segments (pose, translation, label); the checkpoint is chosen on the "
+                          "val split's loss.",
+                          epilog="examples:\n  drape train motion --data motion.zarr --out runs/motion --device cuda\n"
+                          "  drape train motion --data motion.zarr --out runs/no-vertex --no-vertex-loss")
+    m.add_argument("--data", required=True, help="the dataset store")
+    m.add_argument("--out", required=True, help="the run directory")
+    m.add_argument("--config", default=None,
+                   help="training config (.toml/.yaml/.json; fields of training.motion.config.MotionConfig)")
+    m.add_argument("--no-vertex-loss", action="store_true", help="train without L_V^B (Table 8's ablation)")
+    m.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
+    m.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    m.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    m.add_argument("--force", action="store_true", help="replace the run in --out")
+    m.set_defaults(func=_cmd_train_motion)
+
+    p = sub.add_parser("sample", formatter_class=formatter, help="new motions from a trained generator",
+                       description="Sample new motions of a label from a trained motion generator and write them "
+                       "as the motion library's .npz files (drape motion export turns them into BVH or USD).",
+                       epilog="example:\n  drape sample motion runs/motion --label walk --count 8 --seed 0 --out gen/")
+    samplers = p.add_subparsers(dest="what", metavar="WHAT", required=True)
+    s = samplers.add_parser("motion", formatter_class=formatter, help="motions of a label")
+    s.add_argument("run", help="a run directory of `drape train motion`")
+    s.add_argument("--label", required=True, help="one of the labels the model was trained on")
+    s.add_argument("--count", type=int, default=8)
+    s.add_argument("--seed", type=int, default=0)
+    s.add_argument("--out", required=True, help="a directory for the .npz files")
+    s.add_argument("--device", default="cpu", help="cpu, cuda or auto")
+    s.set_defaults(func=_cmd_sample_motion)
 
     p = sub.add_parser("evaluate", formatter_class=formatter, help="a trained model's errors on a split",
                        description="Paper 000's Tables 1 and 2 on a split: mean per-vertex error (mm) of the "
@@ -68,11 +98,54 @@ def _cmd_train_gnn(args) -> int:
     return 0
 
 
-def _cmd_evaluate(args) -> int:
-    from training.gnn.run import evaluate_gnn, format_evaluation
+def _cmd_train_motion(args) -> int:
+    from datagen.config import load_config
+    from training.motion.config import MotionConfig
+    from training.motion.run import train_motion
 
-    e = evaluate_gnn(args.run, data=args.data, split=args.split, max_frames=args.max_frames, device=args.device)
-    print(format_evaluation(e))
+    data = load_config(MotionConfig, args.config).as_dict() if args.config else MotionConfig().as_dict()
+    if args.no_vertex_loss:
+        data["vertex_loss"] = False
+    if args.epochs is not None:
+        data["epochs"] = args.epochs
+    config = load_config(MotionConfig, data)
+    result = train_motion(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
+    print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments; "
+          f"best validation loss {result['best']:.4f} ({result['best_checkpoint']})")
+    return 0
+
+
+def _cmd_sample_motion(args) -> int:
+    import time
+
+    from training.motion.run import sample_motions
+
+    t0 = time.perf_counter()
+    paths = sample_motions(args.run, args.label, args.count, args.seed, args.out, device=args.device)
+    print(f"wrote {len(paths)} {args.label} motions into {args.out} ({time.perf_counter() - t0:.1f} s): "
+          f"{paths[0].name} .. {paths[-1].name}; e.g. drape motion export {paths[0]} --format bvh --out "
+          f"{paths[0].with_suffix('.bvh')}")
+    return 0
+
+
+def _run_kind(run: str) -> str | None:
+    from training.loop import RUN_FILE
+
+    f = Path(run) / RUN_FILE
+    return json.loads(f.read_text()).get("kind") if f.is_file() else None
+
+
+def _cmd_evaluate(args) -> int:
+    if _run_kind(args.run) == "motion":
+        from training.motion.run import evaluate_motion, format_motion_evaluation
+
+        e = evaluate_motion(args.run, data=args.data, split=args.split, device=args.device)
+        print(format_motion_evaluation(e))
+    else:
+        from training.gnn.run import evaluate_gnn, format_evaluation
+
+        e = evaluate_gnn(args.run, data=args.data, split=args.split, max_frames=args.max_frames, device=args.device)
+        print(format_evaluation(e))
     if args.json:
         Path(args.json).write_text(json.dumps(e, indent=2))
         print(f"wrote {args.json}", file=sys.stderr)

@@ -1,0 +1,232 @@
+"""Train, evaluate and sample paper 001's motion generator from a store's 60-frame segments.
+
+- :func:`train_motion`: the train split's labelled segments (``label >= 0``: unlabelled mocap is
+  skipped), the checkpoint chosen on the validation split's loss, through the shared loop.
+- :func:`evaluate_motion`: Table 3's reconstruction figures on a split's unseen segments (the
+  posterior mean decoded): RMSE of the pose parameters (axis-angle, rad) and of the body vertices
+  (m), the Hausdorff distance between predicted and true vertex sets (m, mean over frames), beside
+  a trivial baseline (every frame the label's mean pose over the training segments, the true
+  translation).
+- :func:`sample_motions`: new motions of a label, as the motion library's ``.npz``.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from datagen.errors import InputError
+from datagen.store import open_store
+from training.data import SegmentDataset
+from training.loop import RUN_FILE, fit, prepare_run, resolve_device, seed_everything
+from training.motion.config import MotionConfig
+
+KIND = "motion"
+
+
+def _labelled(ds: SegmentDataset) -> SegmentDataset:
+    """Keep the segments with a label (paper 001 trains on labelled motions; unlabelled mocap is -1)."""
+    keep = [k for k, seg in enumerate(ds.segments) if ds.store.segment(int(seg), names=["label"])["label"][0] >= 0]
+    ds.segments = ds.segments[keep]
+    return ds
+
+
+def _segments(store, split: str) -> SegmentDataset:
+    ds = _labelled(SegmentDataset(store, split, names=("pose", "trans", "label")))
+    if not len(ds):
+        raise InputError(f"the {split} split of {store.path} has no labelled segments (label >= 0); the motion "
+                         "generator learns labelled motions")
+    return ds
+
+
+def _loader(ds, config: MotionConfig, *, shuffle: bool):
+    import os
+
+    world = int(os.environ.get("WORLD_SIZE", "1"))
+    if config.batch_size % world:
+        raise InputError(f"batch_size {config.batch_size} is the global batch; it must divide by the {world} processes")
+    g = torch.Generator()
+    g.manual_seed(config.seed)
+    return torch.utils.data.DataLoader(ds, batch_size=max(1, min(config.batch_size // world, len(ds))), shuffle=shuffle,
+                                       num_workers=config.workers, persistent_workers=config.workers > 0,
+                                       generator=g, multiprocessing_context="spawn" if config.workers > 0 else None)
+
+
+def _label_names(store) -> list[str]:
+    names = store.attrs.get("label_names") or []
+    if not names:
+        raise InputError(f"{store.path} has no label names; the motion generator needs labelled motions")
+    return list(names)
+
+
+def train_motion(data: str | Path, out: str | Path, config: MotionConfig, *, device: str = "auto",
+                 resume: bool = False, force: bool = False) -> dict[str, Any]:
+    """Train the motion generator on ``data``'s train split, choosing the checkpoint on its val split."""
+    from training.motion.module import MotionModule
+
+    resolve_device(device)
+    store = open_store(data)
+    labels = _label_names(store)
+    train, val = _segments(store, "train"), _segments(store, "val")
+    meta = {"kind": KIND, "config": config.as_dict(), "labels": labels,
+            "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
+                      "code_version": store.attrs.get("code_version"),
+                      "schema_version": store.attrs.get("schema_version")},
+            "fps": float(store.attrs["config"].get("fps", 30.0)), "frames": int(store.segment_length)}
+    out = prepare_run(out, resume=resume, force=force, meta=meta)
+    seed_everything(config.seed)
+    module = MotionModule(config.as_dict(), len(labels), store.body_model(), store.betas())
+    t0 = time.perf_counter()
+    result = fit(module, _loader(train, config, shuffle=True), _loader(val, config, shuffle=False), config, out,
+                 device=device, resume=resume, monitor="val/loss")
+    result |= {"seconds": time.perf_counter() - t0, "train_segments": len(train), "val_segments": len(val),
+               "parameters": sum(p.numel() for p in module.model.parameters())}
+    (out / "train_summary.json").write_text(json.dumps(result, indent=2))
+    return result
+
+
+def load_motion(run: str | Path, *, checkpoint: str = "best", data: str | Path | None = None):
+    """(module on the CPU in eval mode, run metadata, checkpoint path) of a motion run."""
+    from training.motion.module import MotionModule
+
+    run = Path(run)
+    meta_path = run / RUN_FILE
+    if not meta_path.is_file():
+        raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
+    meta = json.loads(meta_path.read_text())
+    if meta.get("kind") != KIND:
+        raise InputError(f"{run} holds a {meta.get('kind')!r} model, not paper 001's motion generator ({KIND!r})")
+    path = run / "checkpoints" / f"{checkpoint}.ckpt"
+    if not path.is_file():
+        path = run / "checkpoints" / "last.ckpt"
+    if not path.is_file():
+        raise InputError(f"{run} has no checkpoint yet (checkpoints/best.ckpt or last.ckpt); train it first")
+    store = open_store(data or meta["store"]["path"])
+    module = MotionModule.load_from_checkpoint(path, map_location="cpu", body=store.body_model(), betas=store.betas())
+    module.eval()
+    return module, meta, path, store
+
+
+def _hausdorff(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
+    """Symmetric Hausdorff distance between point sets a [N, V, 3] and b [N, W, 3], per row [N]."""
+    d = torch.cdist(a, b)
+    return torch.maximum(d.min(dim=2).values.max(dim=1).values, d.min(dim=1).values.max(dim=1).values)
+
+
+@torch.no_grad()
+def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: str = "test",
+                    device: str = "auto") -> dict[str, Any]:
+    """Reconstruction on ``split`` (see the module docstring) for the model and the baseline; JSON-able."""
+    from datagen.geometry.rotations import axis_angle_to_matrix, matrix_to_axis_angle
+    from training.motion.model import features_to_frames
+    from training.motion.module import pose_features
+
+    module, meta, ckpt, store = load_motion(run, data=data)
+    accelerator = resolve_device(device)
+    dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
+    module.to(dev)
+    test = _segments(store, split)
+    mean_pose = _mean_poses(_segments(store, "train"), len(meta["labels"]))
+    sums = {k: 0.0 for k in ("pose_sq", "vertex_sq", "hausdorff", "base_pose_sq", "base_vertex_sq", "base_hausdorff")}
+    counts = {"pose": 0, "vertex": 0, "frames": 0}
+    for batch in torch.utils.data.DataLoader(test, batch_size=8, shuffle=False):
+        batch = {k: v.to(dev) for k, v in batch.items()}
+        x, rot = pose_features(batch)
+        label = batch["label"][:, 0].long()
+        mu, _ = module.model.encode(x, label)
+        prot, ptrans = features_to_frames(module.model.decode(mu, label, x.shape[1]).float())
+        body = batch["body"].long()
+        v_true = module.vertices(rot, x[..., -3:], body)
+        v_pred = module.vertices(prot, ptrans, body)
+        base_rot = axis_angle_to_matrix(mean_pose.to(dev)[label])[:, None].expand_as(rot)
+        v_base = module.vertices(base_rot, x[..., -3:], body)
+        pose_true = batch["pose"].float()
+        B, T = rot.shape[:2]
+        sums["pose_sq"] += float(((matrix_to_axis_angle(prot) - pose_true) ** 2).sum())
+        sums["base_pose_sq"] += float(((mean_pose.to(dev)[label][:, None] - pose_true) ** 2).sum())
+        counts["pose"] += pose_true.numel()
+        sums["vertex_sq"] += float(((v_pred - v_true) ** 2).sum())
+        sums["base_vertex_sq"] += float(((v_base - v_true) ** 2).sum())
+        counts["vertex"] += v_true.numel()
+        flat = (B * T, -1, 3)
+        sums["hausdorff"] += float(_hausdorff(v_pred.reshape(flat), v_true.reshape(flat)).sum())
+        sums["base_hausdorff"] += float(_hausdorff(v_base.reshape(flat), v_true.reshape(flat)).sum())
+        counts["frames"] += B * T
+    row = {"pose_rmse": (sums["pose_sq"] / counts["pose"]) ** 0.5,
+           "vertex_rmse": (sums["vertex_sq"] / counts["vertex"]) ** 0.5,
+           "hausdorff": sums["hausdorff"] / counts["frames"]}
+    base = {"pose_rmse": (sums["base_pose_sq"] / counts["pose"]) ** 0.5,
+            "vertex_rmse": (sums["base_vertex_sq"] / counts["vertex"]) ** 0.5,
+            "hausdorff": sums["base_hausdorff"] / counts["frames"]}
+    return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "segments": len(test),
+            "frames": counts["frames"], "vertex_stride": meta["config"]["vertex_stride"],
+            "model": row, "mean_pose_baseline": base}
+
+
+def _mean_poses(ds: SegmentDataset, labels: int) -> torch.Tensor:
+    """Each label's mean axis-angle pose [labels, 24, 3] over the segments of ``ds`` (zeros if absent)."""
+    sums, counts = torch.zeros(labels, 24, 3), torch.zeros(labels)
+    for k in range(len(ds)):
+        s = ds[k]
+        lab = int(s["label"][0])
+        sums[lab] += s["pose"].float().mean(0)
+        counts[lab] += 1
+    return sums / counts.clamp(min=1)[:, None, None]
+
+
+def format_motion_evaluation(e: dict) -> str:
+    m, b = e["model"], e["mean_pose_baseline"]
+    lines = [f"{e['split']} split: {e['segments']} segments, {e['frames']} frames (vertex metrics on every "
+             f"{e['vertex_stride']}. body vertex)", "",
+             f"{'':22s} {'pose RMSE (x1e-2)':>18s} {'vertex RMSE (x1e-2 m)':>22s} {'Hausdorff (x1e-1 m)':>20s}"]
+    for name, r in (("model", m), ("label's mean pose", b)):
+        lines.append(f"{name:22s} {100 * r['pose_rmse']:18.3f} {100 * r['vertex_rmse']:22.3f} "
+                     f"{10 * r['hausdorff']:20.3f}")
+    return "\n".join(lines)
+
+
+def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str | Path, *,
+                   device: str = "cpu") -> list[Path]:
+    """``count`` new motions of ``label`` from a trained generator, written into the directory ``out``
+    as the motion library's ``.npz`` (readable by ``drape motion export``); returns the paths."""
+    from datagen.geometry.rotations import matrix_to_axis_angle
+    from datagen.motion.motion import Motion
+    from training.motion.model import features_to_frames
+
+    if count < 1:
+        raise InputError(f"--count must be 1 or more, got {count}")
+    if seed < 0:
+        raise InputError(f"--seed must be 0 or more, got {seed}")
+    module, meta, ckpt, _ = load_motion(run)
+    labels = meta["labels"]
+    if label not in labels:
+        raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out} is a file; give a directory for the motions")
+    if not out.parent.is_dir():
+        raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
+    accelerator = resolve_device(device)
+    module.to(torch.device("cuda" if accelerator == "gpu" else "cpu"))
+    g = torch.Generator().manual_seed(int(seed))
+    code = labels.index(label)
+    x = module.model.sample(torch.full((count,), code, dtype=torch.long, device=module.device), meta["frames"],
+                            generator=g).float()
+    rot, trans = features_to_frames(x)
+    poses = matrix_to_axis_angle(rot).cpu().numpy().astype(np.float64)
+    trans = (trans - trans[:, :1]).cpu().numpy().astype(np.float64)  # every motion starts at the origin
+    out.mkdir(exist_ok=True)
+    paths = []
+    for k in range(count):
+        motion = Motion(poses=poses[k], trans=trans[k], fps=meta["fps"], label=code, label_name=label,
+                        source={"kind": "generated", "model": KIND, "run": str(Path(run).resolve()),
+                                "checkpoint": ckpt.name, "seed": int(seed), "index": k})
+        path = out / f"{label}_{seed}_{k:03d}.npz"
+        motion.save_npz(path)
+        paths.append(path)
+    return paths
