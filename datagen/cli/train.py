@@ -58,15 +58,22 @@ def register(sub, formatter) -> None:
     s.set_defaults(func=_cmd_sample_motion)
 
     p = sub.add_parser("evaluate", formatter_class=formatter, help="a trained model's errors on a split",
-                       description="Paper 000's Tables 1 and 2 on a split: mean per-vertex error (mm) of the "
-                       "coarse and detailed predictions per body and overall, beside trivial baselines, and the "
-                       "share of predicted vertices inside the body.")
+                       description="For a GNN run, paper 000's Tables 1 and 2 on a split: mean per-vertex error "
+                       "(mm) of the coarse and detailed predictions per body and overall, beside trivial baselines, "
+                       "and the share of predicted vertices inside the body. For a motion-generator run, paper 001's "
+                       "Table 3 (reconstruction RMSE and Hausdorff beside the label's mean pose) and Table 4 (FID, "
+                       "recognition accuracy, diversity, multimodality of generated sets, with a recogniser trained "
+                       "on the store's train split).")
     p.add_argument("run", help="a run directory of `drape train`")
     p.add_argument("--data", default=None, help="the store (default: the one it trained on)")
     p.add_argument("--split", default="test", choices=("train", "val", "test"))
     p.add_argument("--max-frames", type=int, default=None, help="evaluate this many frames, drawn evenly")
     p.add_argument("--device", default="auto")
     p.add_argument("--json", default=None, metavar="FILE", help="also write the figures as JSON")
+    p.add_argument("--repetitions", type=int, default=20,
+                   help="motion generator: generated sets drawn for Table 4's figures (paper: 20)")
+    p.add_argument("--no-generation", action="store_true",
+                   help="motion generator: Table 3's reconstruction only (no recogniser, no generated sets)")
     p.set_defaults(func=_cmd_evaluate)
 
     p = sub.add_parser("predict", formatter_class=formatter, help="predict a sample's garment with a trained model",
@@ -139,7 +146,8 @@ def _cmd_evaluate(args) -> int:
     if _run_kind(args.run) == "motion":
         from training.motion.run import evaluate_motion, format_motion_evaluation
 
-        e = evaluate_motion(args.run, data=args.data, split=args.split, device=args.device)
+        e = evaluate_motion(args.run, data=args.data, split=args.split, device=args.device,
+                            generation=not args.no_generation, repetitions=args.repetitions)
         print(format_motion_evaluation(e))
     else:
         from training.gnn.run import evaluate_gnn, format_evaluation

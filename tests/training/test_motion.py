@@ -64,12 +64,33 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
     from training.motion.run import evaluate_motion
 
     run, _ = motion_run
-    e = evaluate_motion(run, split="test", device="cpu")
+    e = evaluate_motion(run, split="test", device="cpu", repetitions=3, recognizer_epochs=5)
     for row in (e["model"], e["mean_pose_baseline"]):
         assert all(np.isfinite(v) and v > 0 for v in row.values())
     assert e["frames"] == e["segments"] * 3
-    assert main(["evaluate", str(run), "--split", "test", "--device", "cpu"]) == 0
-    assert "label's mean pose" in capsys.readouterr().out
+    g = e["generation"]
+    assert g["repetitions"] == 3 and 0 <= g["recognizer_test_accuracy"] <= 1
+    for part in ("generated", "real"):
+        assert np.isfinite(g[part]["fid"]["mean"]) and g[part]["fid"]["mean"] >= -1e-6
+        assert 0 <= g[part]["accuracy"]["mean"] <= 1 and g[part]["diversity"]["mean"] >= 0
+    assert main(["evaluate", str(run), "--split", "test", "--device", "cpu", "--repetitions", "2"]) == 0
+    out = capsys.readouterr().out
+    assert "label's mean pose" in out and "generated" in out and "multimodality" in out
+
+
+def test_generation_metrics_on_known_features():
+    """FID is 0 for one set against itself and grows with a shift; diversity of two points is their
+    distance; multimodality averages within labels only."""
+    from training.motion.recognition import diversity, frechet_distance, multimodality
+
+    rng = np.random.default_rng(0)
+    a = rng.normal(size=(500, 4))
+    assert abs(frechet_distance(a, a)) < 1e-6
+    assert abs(frechet_distance(a, a + 2.0) - 16.0) < 1e-3  # |Δμ|² = 4 x 2², equal covariances
+    two = np.array([[0.0, 0.0], [3.0, 4.0]])
+    assert diversity(two, 1000, rng) == pytest.approx(2.5, abs=0.3)  # pairs drawn with replacement: 0 or 5
+    f = np.array([[0.0], [1.0], [100.0], [101.0]])
+    assert multimodality(f, np.array([0, 0, 1, 1]), 2000, rng) == pytest.approx(0.5, abs=0.1)
 
 
 def test_sampled_motions_are_library_motions_that_export(motion_run, tmp_path, capsys):

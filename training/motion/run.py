@@ -118,8 +118,47 @@ def _hausdorff(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
     return torch.maximum(d.min(dim=2).values.max(dim=1).values, d.min(dim=1).values.max(dim=1).values)
 
 
+def _split_tensors(store, split: str, device) -> tuple[torch.Tensor, torch.Tensor]:
+    """Frame features [N, T, 147] and labels [N] of a split's labelled segments."""
+    from training.motion.module import pose_features
+
+    xs, ys = [], []
+    for batch in torch.utils.data.DataLoader(_segments(store, split), batch_size=64, shuffle=False):
+        xs.append(pose_features(batch)[0])
+        ys.append(batch["label"][:, 0].long())
+    return torch.cat(xs).to(device), torch.cat(ys).to(device)
+
+
+def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: str = "test", device: str = "auto",
+                    generation: bool = True, repetitions: int = 20, recognizer_epochs: int = 100) -> dict[str, Any]:
+    """Table 3 (reconstruction, beside the mean-pose baseline) and, with ``generation``, Table 4
+    (:mod:`training.motion.recognition`) on ``split``; JSON-able."""
+    e = _reconstruction(run, data=data, split=split, device=device)
+    if generation:
+        from training.motion.recognition import generation_metrics, train_recognizer
+
+        if repetitions < 2:
+            raise InputError(f"--repetitions must be 2 or more (the spread needs two), got {repetitions}")
+        module, meta, _, store = load_motion(run, data=data)
+        dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
+        module.to(dev)
+        labels = len(meta["labels"])
+        x_train, y_train = _split_tensors(store, "train", dev)
+        x_test, y_test = _split_tensors(store, split, dev)
+        torch.manual_seed(0)
+        recognizer = train_recognizer(x_train, y_train, labels, epochs=recognizer_epochs, seed=0)
+        frames = x_test.shape[1]
+
+        def generate(lab, g):
+            return module.model.sample(lab, frames, generator=g).float()
+
+        e["generation"] = generation_metrics(recognizer, generate, x_test, y_test, x_train, repetitions=repetitions)
+        e["generation"]["recognizer_epochs"] = recognizer_epochs
+    return e
+
+
 @torch.no_grad()
-def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: str = "test",
+def _reconstruction(run: str | Path, *, data: str | Path | None = None, split: str = "test",
                     device: str = "auto") -> dict[str, Any]:
     """Reconstruction on ``split`` (see the module docstring) for the model and the baseline; JSON-able."""
     from datagen.geometry.rotations import axis_angle_to_matrix, matrix_to_axis_angle
@@ -182,11 +221,23 @@ def _mean_poses(ds: SegmentDataset, labels: int) -> torch.Tensor:
 def format_motion_evaluation(e: dict) -> str:
     m, b = e["model"], e["mean_pose_baseline"]
     lines = [f"{e['split']} split: {e['segments']} segments, {e['frames']} frames (vertex metrics on every "
-             f"{e['vertex_stride']}. body vertex)", "",
+             f"{e['vertex_stride']}. body vertex)", "", "reconstruction (paper 001 Table 3):",
              f"{'':22s} {'pose RMSE (x1e-2)':>18s} {'vertex RMSE (x1e-2 m)':>22s} {'Hausdorff (x1e-1 m)':>20s}"]
     for name, r in (("model", m), ("label's mean pose", b)):
         lines.append(f"{name:22s} {100 * r['pose_rmse']:18.3f} {100 * r['vertex_rmse']:22.3f} "
                      f"{10 * r['hausdorff']:20.3f}")
+    g = e.get("generation")
+    if g:
+        lines += ["", f"generation (Table 4; {g['repetitions']} generated sets, mean ± 95 % interval; recogniser: "
+                      f"GRU trained {g['recognizer_epochs']} epochs on the train split, {100 * g['recognizer_test_accuracy']:.1f} % "
+                      "on the real test motions):",
+                  f"{'':22s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s}"]
+        for name, r in (("real test motions", g["real"]), ("generated", g["generated"])):
+            cells = []
+            for k in ("fid", "accuracy", "diversity", "multimodality"):
+                scale = 100 if k == "accuracy" else 1
+                cells.append(f"{scale * r[k]['mean']:9.3f}±{scale * r[k]['interval']:<6.3f}")
+            lines.append(f"{name:22s} " + " ".join(f"{c:>16s}" for c in cells))
     return "\n".join(lines)
 
 
