@@ -130,3 +130,24 @@ def test_bad_input_gets_one_clear_line(motion_run, tmp_path):
     with pytest.raises(ConfigError, match="multiple of heads"):
         MotionConfig(d_model=30, heads=4)
     assert not (tmp_path / "a").exists()
+
+
+def test_sted_is_zero_for_rigid_motion_and_grows_with_stretch():
+    from training.motion.sted import mesh_edges, sted
+
+    rng = np.random.default_rng(1)
+    verts = torch.as_tensor(rng.normal(size=(40, 3)), dtype=torch.float32)
+    faces = np.array([[i, (i + 1) % 40, (i + 7) % 40] for i in range(40)])
+    edges = torch.as_tensor(mesh_edges(faces))
+    T = 5
+    true = torch.stack([verts + torch.tensor([0.1 * t, 0.0, 0.0]) for t in range(T)])[None]
+    rot = torch.tensor([[0.0, -1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 0.0, 1.0]])
+    rigid = true @ rot.T + 0.3  # the same motion turned and moved: same edge lengths, same steps
+    assert sted(rigid, true, edges)["sted"].item() < 1e-5
+    stretched = true.clone()
+    stretched[..., 0] *= 1.2  # stretched along x: relative edge changes differ between edges
+    s = sted(stretched, true, edges)
+    assert s["spatial"].item() > 0.01 and s["temporal"].item() > 0.01
+    more = true.clone()
+    more[..., 0] *= 1.5
+    assert sted(more, true, edges)["sted"].item() > s["sted"].item()

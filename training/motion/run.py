@@ -4,7 +4,8 @@
   skipped), the checkpoint chosen on the validation split's loss, through the shared loop.
 - :func:`evaluate_motion`: Table 3's reconstruction figures on a split's unseen segments (the
   posterior mean decoded): RMSE of the pose parameters (axis-angle, rad) and of the body vertices
-  (m), the Hausdorff distance between predicted and true vertex sets (m, mean over frames), beside
+  (m), the Hausdorff distance between predicted and true vertex sets (m, mean over frames), STED
+  on the whole body mesh (:mod:`training.motion.sted`, mean over segments), beside
   a trivial baseline (every frame the label's mean pose over the training segments, the true
   translation).
 - :func:`sample_motions`: new motions of a label, as the motion library's ``.npz``.
@@ -163,16 +164,26 @@ def _reconstruction(run: str | Path, *, data: str | Path | None = None, split: s
     """Reconstruction on ``split`` (see the module docstring) for the model and the baseline; JSON-able."""
     from datagen.geometry.rotations import axis_angle_to_matrix, matrix_to_axis_angle
     from training.motion.model import features_to_frames
-    from training.motion.module import pose_features
+    from training.motion.module import BodyLayer, pose_features
+    from training.motion.sted import mesh_edges, sted
 
     module, meta, ckpt, store = load_motion(run, data=data)
     accelerator = resolve_device(device)
     dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
     module.to(dev)
+    body_arrays = store.body_model()
+    full = BodyLayer(body_arrays, 1).to(dev)  # STED needs the whole mesh
+    edges = torch.as_tensor(mesh_edges(body_arrays["faces"]), device=dev)
+
+    def posed(rot, trans, body):
+        B, T = rot.shape[:2]
+        v = full(rot.reshape(B * T, 24, 3, 3), trans.reshape(B * T, 3), module.betas[body].repeat_interleave(T, 0))
+        return v.reshape(B, T, -1, 3)
     test = _segments(store, split)
     mean_pose = _mean_poses(_segments(store, "train"), len(meta["labels"]))
-    sums = {k: 0.0 for k in ("pose_sq", "vertex_sq", "hausdorff", "base_pose_sq", "base_vertex_sq", "base_hausdorff")}
-    counts = {"pose": 0, "vertex": 0, "frames": 0}
+    sums = {k: 0.0 for k in ("pose_sq", "vertex_sq", "hausdorff", "sted", "base_pose_sq", "base_vertex_sq",
+                             "base_hausdorff", "base_sted")}
+    counts = {"pose": 0, "vertex": 0, "frames": 0, "segments": 0}
     for batch in torch.utils.data.DataLoader(test, batch_size=8, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
         x, rot = pose_features(batch)
@@ -196,12 +207,16 @@ def _reconstruction(run: str | Path, *, data: str | Path | None = None, split: s
         sums["hausdorff"] += float(_hausdorff(v_pred.reshape(flat), v_true.reshape(flat)).sum())
         sums["base_hausdorff"] += float(_hausdorff(v_base.reshape(flat), v_true.reshape(flat)).sum())
         counts["frames"] += B * T
+        t_full = posed(rot, x[..., -3:], body)
+        sums["sted"] += float(sted(posed(prot, ptrans, body), t_full, edges)["sted"].sum())
+        sums["base_sted"] += float(sted(posed(base_rot, x[..., -3:], body), t_full, edges)["sted"].sum())
+        counts["segments"] += B
     row = {"pose_rmse": (sums["pose_sq"] / counts["pose"]) ** 0.5,
            "vertex_rmse": (sums["vertex_sq"] / counts["vertex"]) ** 0.5,
-           "hausdorff": sums["hausdorff"] / counts["frames"]}
+           "hausdorff": sums["hausdorff"] / counts["frames"], "sted": sums["sted"] / counts["segments"]}
     base = {"pose_rmse": (sums["base_pose_sq"] / counts["pose"]) ** 0.5,
             "vertex_rmse": (sums["base_vertex_sq"] / counts["vertex"]) ** 0.5,
-            "hausdorff": sums["base_hausdorff"] / counts["frames"]}
+            "hausdorff": sums["base_hausdorff"] / counts["frames"], "sted": sums["base_sted"] / counts["segments"]}
     return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "segments": len(test),
             "frames": counts["frames"], "vertex_stride": meta["config"]["vertex_stride"],
             "model": row, "mean_pose_baseline": base}
@@ -222,10 +237,11 @@ def format_motion_evaluation(e: dict) -> str:
     m, b = e["model"], e["mean_pose_baseline"]
     lines = [f"{e['split']} split: {e['segments']} segments, {e['frames']} frames (vertex metrics on every "
              f"{e['vertex_stride']}. body vertex)", "", "reconstruction (paper 001 Table 3):",
-             f"{'':22s} {'pose RMSE (x1e-2)':>18s} {'vertex RMSE (x1e-2 m)':>22s} {'Hausdorff (x1e-1 m)':>20s}"]
+             f"{'':22s} {'pose RMSE (x1e-2)':>18s} {'vertex RMSE (x1e-2 m)':>22s} {'Hausdorff (x1e-1 m)':>20s} "
+             f"{'STED (x1e-2)':>13s}"]
     for name, r in (("model", m), ("label's mean pose", b)):
         lines.append(f"{name:22s} {100 * r['pose_rmse']:18.3f} {100 * r['vertex_rmse']:22.3f} "
-                     f"{10 * r['hausdorff']:20.3f}")
+                     f"{10 * r['hausdorff']:20.3f} {100 * r['sted']:13.3f}")
     g = e.get("generation")
     if g:
         lines += ["", f"generation (Table 4; {g['repetitions']} generated sets, mean ± 95 % interval; recogniser: "
