@@ -42,6 +42,23 @@ def register(sub, formatter) -> None:
     m.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
     m.add_argument("--force", action="store_true", help="replace the run in --out")
     m.set_defaults(func=_cmd_train_motion)
+    r = models.add_parser("garment", formatter_class=formatter, help="paper 001's garment regressor (one template)",
+                          description="Train paper 001's dynamic garment regressor (§3.3) for one garment type's "
+                          "template on a store's 60-frame segments: a pose encoder and an autoregressive garment "
+                          "decoder with a learnable BOS (pretrained, then frozen), vertex and Laplacian losses.",
+                          epilog="examples:\n  drape train garment --data motion.zarr --garment skirt --out runs/skirt\n"
+                          "  drape train garment --data motion.zarr --garment skirt --out runs/skirt-zero-bos --zero-bos")
+    r.add_argument("--data", required=True, help="the dataset store")
+    r.add_argument("--out", required=True, help="the run directory")
+    r.add_argument("--garment", default=None, help="the garment type (overrides the config; default skirt)")
+    r.add_argument("--config", default=None,
+                   help="training config (.toml/.yaml/.json; fields of training.garment.config.GarmentConfig)")
+    r.add_argument("--zero-bos", action="store_true", help="a fixed zero BOS instead of the learned one (Table 9)")
+    r.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
+    r.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    r.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    r.add_argument("--force", action="store_true", help="replace the run in --out")
+    r.set_defaults(func=_cmd_train_garment)
 
     p = sub.add_parser("sample", formatter_class=formatter, help="new motions from a trained generator",
                        description="Sample new motions of a label from a trained motion generator and write them "
@@ -122,6 +139,26 @@ def _cmd_train_motion(args) -> int:
     return 0
 
 
+def _cmd_train_garment(args) -> int:
+    from datagen.config import load_config
+    from training.garment.config import GarmentConfig
+    from training.garment.run import train_garment
+
+    data = load_config(GarmentConfig, args.config).as_dict() if args.config else GarmentConfig().as_dict()
+    if args.garment is not None:
+        data["garment"] = args.garment
+    if args.zero_bos:
+        data["bos"] = "zero"
+    if args.epochs is not None:
+        data["epochs"] = args.epochs
+    config = load_config(GarmentConfig, data)
+    result = train_garment(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
+    print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments of "
+          f"the {config.garment} template ({result['template_vertices']} vertices); best validation loss "
+          f"{result['best']:.4f} ({result['best_checkpoint']})")
+    return 0
+
+
 def _cmd_sample_motion(args) -> int:
     import time
 
@@ -143,7 +180,13 @@ def _run_kind(run: str) -> str | None:
 
 
 def _cmd_evaluate(args) -> int:
-    if _run_kind(args.run) == "motion":
+    kind = _run_kind(args.run)
+    if kind == "garment":
+        from training.garment.run import evaluate_garment, format_garment_evaluation
+
+        e = evaluate_garment(args.run, data=args.data, split=args.split, device=args.device)
+        print(format_garment_evaluation(e))
+    elif kind == "motion":
         from training.motion.run import evaluate_motion, format_motion_evaluation
 
         e = evaluate_motion(args.run, data=args.data, split=args.split, device=args.device,

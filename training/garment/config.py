@@ -1,0 +1,69 @@
+"""The garment regressor's training config, read by drape's strict loader (``datagen.config``)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+from training.garment.model import BOS_KINDS
+
+
+@dataclass(frozen=True, kw_only=True)
+class GarmentConfig:
+    """How paper 001's garment regressor is built and trained (§4.2's values are the defaults).
+
+    Attributes:
+        garment: the garment type whose template is learned (one topology per model, e.g. ``skirt``).
+        seed: seeds torch, numpy, Python and the DataLoader workers.
+        epochs: most epochs (paper: 2000).
+        batch_size, batch_growth, growth_every, max_batch_size: the batch starts at ``batch_size``
+            segments and grows by ``batch_growth`` every ``growth_every`` epochs up to
+            ``max_batch_size`` (paper: 10, 5, 200, 25).
+        lr, lr_factor, lr_patience: Adam's rate, times ``lr_factor`` when the validation loss has
+            not fallen for ``lr_patience`` epochs (paper: 1e-3, 0.1, 30).
+        early_stop_patience: stop when the validation loss has not fallen for this many epochs.
+        workers, precision: as for the other models.
+        d_model, heads, layers, feedforward, dropout: the Transformers (paper: 256, 4, M = 2, 512, 0.1).
+        bos: ``learned`` (the MLP on the mean pose, pretrained then frozen) or ``zero`` (Table 9).
+        bos_hidden: the BOS MLP's hidden widths (paper: 1024 and 4096).
+        bos_epochs: epochs of the BOS MLP's pretraining on the sequences' last frames.
+        laplacian_weight: λ_Lap (paper: 0.1).
+        target_scale: positions are in metres x this in the loss (100: cm).
+        max_minutes: stop after this much wall time (None: no limit).
+    """
+
+    garment: str = "skirt"
+    seed: int = 0
+    epochs: int = field(default=2000, metadata={"min": 1, "max": 1000000})
+    batch_size: int = field(default=10, metadata={"min": 1, "max": 4096})
+    batch_growth: int = field(default=5, metadata={"min": 0, "max": 4096})
+    growth_every: int = field(default=200, metadata={"min": 1, "max": 1000000})
+    max_batch_size: int = field(default=25, metadata={"min": 1, "max": 4096})
+    lr: float = field(default=1e-3, metadata={"min": 1e-7, "max": 1.0})
+    lr_factor: float = field(default=0.1, metadata={"min": 0.01, "max": 1.0})
+    lr_patience: int = field(default=30, metadata={"min": 1, "max": 100000})
+    early_stop_patience: int = field(default=200, metadata={"min": 1, "max": 100000})
+    workers: int = field(default=0, metadata={"min": 0, "max": 64})
+    precision: str = field(default="auto", metadata={"choices": ("auto", "32", "bf16-mixed", "16-mixed")})
+    d_model: int = field(default=256, metadata={"min": 8, "max": 4096})
+    heads: int = field(default=4, metadata={"min": 1, "max": 64})
+    layers: int = field(default=2, metadata={"min": 1, "max": 64})
+    feedforward: int = field(default=512, metadata={"min": 8, "max": 16384})
+    dropout: float = field(default=0.1, metadata={"min": 0.0, "max": 0.9})
+    bos: str = field(default="learned", metadata={"choices": BOS_KINDS})
+    bos_hidden: tuple[int, int] = (1024, 4096)
+    bos_epochs: int = field(default=200, metadata={"min": 0, "max": 1000000})
+    laplacian_weight: float = field(default=0.1, metadata={"min": 0.0, "max": 1e3})
+    target_scale: float = field(default=100.0, metadata={"min": 1e-3, "max": 1e6})
+    max_minutes: float | None = field(default=None, metadata={"min": 0.1})
+
+    def __post_init__(self):
+        from datagen.errors import ConfigError
+
+        if self.d_model % self.heads:
+            raise ConfigError(f"d_model ({self.d_model}) must be a multiple of heads ({self.heads})")
+        if self.max_batch_size < self.batch_size:
+            raise ConfigError(f"max_batch_size ({self.max_batch_size}) is below batch_size ({self.batch_size})")
+
+    def as_dict(self) -> dict:
+        return dataclasses.asdict(self)

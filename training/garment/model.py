@@ -1,0 +1,75 @@
+"""Paper 001's garment regressor (§3.3, Fig. 4, §4.2) for one garment template (one topology).
+
+- Pose encoder P_E: the motion's frames (the motion generator's 147 features: 6D joint rotations
+  and the translation from the first frame) through a linear embedding, sinusoidal positions and
+  M = 2 Transformer encoder layers (d_model 256, 4 heads, feed-forward 512).
+- Garment decoder G_D: the garment's vertex sequence (each frame's V x 3 positions relative to the
+  root translation, flattened) through a linear embedding, a BOS element first (T + 1), masked
+  self-attention and M = 2 Transformer decoder layers attending to the pose encoding, then a linear
+  map back to V x 3. Trained with teacher forcing; greedy decoding at inference (each predicted
+  frame is fed back as the next input).
+- BOS: an MLP on the sequence's mean pose features (hidden 1024 and 4096, ReLU) that outputs a
+  garment frame, pretrained on the sequence's last frame and then frozen (§4.2); ``bos = "zero"``
+  is Table 9's ablation (a fixed zero frame).
+"""
+
+from __future__ import annotations
+
+import torch
+from torch import nn
+
+from training.motion.model import FRAME_FEATURES, sinusoidal_positions
+
+BOS_KINDS = ("learned", "zero")
+
+
+class GarmentRegressor(nn.Module):
+    def __init__(self, vertices: int, *, d_model: int = 256, heads: int = 4, layers: int = 2, feedforward: int = 512,
+                 dropout: float = 0.1, bos: str = "learned", bos_hidden: tuple[int, int] = (1024, 4096)):
+        super().__init__()
+        if bos not in BOS_KINDS:
+            raise ValueError(f"bos must be one of {BOS_KINDS}, got {bos!r}")
+        self.vertices, self.d_model, self.bos_kind = vertices, d_model, bos
+        self.pose_embedding = nn.Linear(FRAME_FEATURES, d_model)
+        enc = nn.TransformerEncoderLayer(d_model, heads, feedforward, dropout, activation="relu", batch_first=True)
+        self.pose_encoder = nn.TransformerEncoder(enc, layers, enable_nested_tensor=False)
+        dec = nn.TransformerDecoderLayer(d_model, heads, feedforward, dropout, activation="relu", batch_first=True)
+        self.garment_decoder = nn.TransformerDecoder(dec, layers)
+        self.garment_in = nn.Linear(vertices * 3, d_model)
+        self.garment_out = nn.Linear(d_model, vertices * 3)
+        h1, h2 = bos_hidden
+        self.bos = nn.Sequential(nn.Linear(FRAME_FEATURES, h1), nn.ReLU(), nn.Linear(h1, h2), nn.ReLU(),
+                                 nn.Linear(h2, vertices * 3)) if bos == "learned" else None
+
+    def bos_frame(self, poses: torch.Tensor) -> torch.Tensor:
+        """The BOS garment frame [B, V*3] of pose sequences [B, T, 147]."""
+        if self.bos is None:
+            return poses.new_zeros(len(poses), self.vertices * 3)
+        return self.bos(poses.mean(dim=1))
+
+    def encode(self, poses: torch.Tensor) -> torch.Tensor:
+        T = poses.shape[1]
+        return self.pose_encoder(self.pose_embedding(poses) + sinusoidal_positions(T, self.d_model, poses.device)[None])
+
+    def _decode(self, inputs: torch.Tensor, memory: torch.Tensor) -> torch.Tensor:
+        """Outputs [B, n, V*3] for input frames [B, n, V*3] (BOS first), causally masked."""
+        n = inputs.shape[1]
+        h = self.garment_in(inputs) + sinusoidal_positions(n, self.d_model, inputs.device)[None]
+        mask = nn.Transformer.generate_square_subsequent_mask(n, device=inputs.device)
+        return self.garment_out(self.garment_decoder(h, memory, tgt_mask=mask, tgt_is_causal=True))
+
+    def forward(self, poses: torch.Tensor, garment: torch.Tensor) -> torch.Tensor:
+        """Teacher forcing: frames [B, T, V*3] predicted from the poses and the true previous frames."""
+        memory = self.encode(poses)
+        inputs = torch.cat([self.bos_frame(poses)[:, None], garment[:, :-1]], dim=1)
+        return self._decode(inputs, memory)
+
+    @torch.no_grad()
+    def generate(self, poses: torch.Tensor) -> torch.Tensor:
+        """Greedy decoding: frames [B, T, V*3] from the poses alone."""
+        memory = self.encode(poses)
+        frames = [self.bos_frame(poses)[:, None]]
+        for _ in range(poses.shape[1]):
+            out = self._decode(torch.cat(frames, dim=1), memory)
+            frames.append(out[:, -1:])
+        return torch.cat(frames[1:], dim=1)

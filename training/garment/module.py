@@ -1,0 +1,87 @@
+"""Paper 001's garment regressor in the training loop: L_G = L_V^G + λ_Lap L_Lap (eq. 3).
+
+L_V^G is the mean squared error of the garment's vertices (relative to the root translation, in
+``target_scale`` units); L_Lap that of their uniform mesh Laplacians (each vertex minus the mean of
+its neighbours on the template), which keeps wrinkles. Training uses teacher forcing; validation
+decodes greedily, as inference does, and reports the mean vertex error in mm.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytorch_lightning as pl
+import torch
+
+from training.garment.model import GarmentRegressor
+
+
+def template_edges(faces: np.ndarray) -> np.ndarray:
+    from training.motion.sted import mesh_edges
+
+    return mesh_edges(faces)
+
+
+def uniform_laplacian(x: torch.Tensor, edges: torch.Tensor, degree: torch.Tensor) -> torch.Tensor:
+    """x_i - mean of x over i's neighbours, for x [..., V, 3]."""
+    a, b = edges[:, 0], edges[:, 1]
+    s = torch.zeros_like(x).index_add(-2, a, x[..., b, :]).index_add(-2, b, x[..., a, :])
+    return x - s / degree[:, None]
+
+
+class GarmentModule(pl.LightningModule):
+    def __init__(self, config: dict, vertices: int, faces):
+        super().__init__()
+        self.save_hyperparameters(ignore=["faces"])  # the template's faces come from the store on load
+        self.config = config
+        self.model = GarmentRegressor(vertices, d_model=config["d_model"], heads=config["heads"],
+                                      layers=config["layers"], feedforward=config["feedforward"],
+                                      dropout=config["dropout"], bos=config["bos"],
+                                      bos_hidden=tuple(config["bos_hidden"]))
+        edges = torch.as_tensor(template_edges(np.asarray(faces)))
+        degree = torch.zeros(vertices).index_add(0, edges[:, 0], torch.ones(len(edges)))
+        degree = degree.index_add(0, edges[:, 1], torch.ones(len(edges))).clamp(min=1)
+        self.register_buffer("edges", edges, persistent=False)
+        self.register_buffer("degree", degree, persistent=False)
+        self.scale = float(config["target_scale"])
+        if self.model.bos is not None:  # pretrained before fitting, then frozen (§4.2)
+            for p in self.model.bos.parameters():
+                p.requires_grad_(False)
+
+    def targets(self, batch) -> tuple[torch.Tensor, torch.Tensor]:
+        """(pose features [B, T, 147], garment frames [B, T, V*3] relative to the translation, scaled)."""
+        from training.motion.module import pose_features
+
+        x, _ = pose_features(batch)
+        g = (batch["detail"].float() - batch["trans"].float()[:, :, None]) * self.scale
+        return x, g.flatten(2)
+
+    def losses(self, pred: torch.Tensor, true: torch.Tensor) -> dict[str, torch.Tensor]:
+        B, T = true.shape[:2]
+        p, t = pred.float().reshape(B, T, -1, 3), true.reshape(B, T, -1, 3)
+        vertex = torch.nn.functional.mse_loss(p, t)
+        lap = torch.nn.functional.mse_loss(uniform_laplacian(p, self.edges, self.degree),
+                                           uniform_laplacian(t, self.edges, self.degree))
+        return {"vertex": vertex, "laplacian": lap, "loss": vertex + self.config["laplacian_weight"] * lap,
+                "vertex_mm": 1000 / self.scale * (p - t).norm(dim=-1).mean()}
+
+    def training_step(self, batch, _):
+        x, g = self.targets(batch)
+        r = self.losses(self.model(x, g), g)
+        n = len(x)
+        for k in ("loss", "vertex", "laplacian"):
+            self.log(f"train/{k}", r[k], batch_size=n, prog_bar=k == "loss", sync_dist=True, on_epoch=True,
+                     on_step=k == "loss")
+        return r["loss"]
+
+    def validation_step(self, batch, _):
+        x, g = self.targets(batch)
+        r = self.losses(self.model.generate(x), g)
+        n = len(x)
+        self.log("val/loss", r["loss"], batch_size=n, prog_bar=True, sync_dist=True)
+        self.log("val/vertex_mm", r["vertex_mm"], batch_size=n, prog_bar=True, sync_dist=True)
+
+    def configure_optimizers(self):
+        opt = torch.optim.Adam([p for p in self.parameters() if p.requires_grad], lr=self.config["lr"])
+        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"],
+                                                           patience=self.config["lr_patience"])
+        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val/loss"}}

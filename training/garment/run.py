@@ -1,0 +1,228 @@
+"""Train and evaluate paper 001's garment regressor on one garment template of a store.
+
+The template is the garment instance of the config's type with the most training segments; its
+segments in every split are used (a ``paper-motion`` store keeps the same garments in every split:
+only the motions differ). :func:`evaluate_garment` gives Tables 6/7/9's figures on a split's unseen
+segments, decoded greedily from the poses alone: RMSE of the vertices (m), Hausdorff distance (m,
+mean over frames), STED (:mod:`training.motion.sted`) and the cosine similarity of vertex normals,
+beside a trivial baseline (the template skinned to the pose: the store's derived ``skin`` plus the
+translation).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import torch
+
+from datagen.errors import InputError
+from datagen.store import open_store
+from training.data import SegmentDataset
+from training.garment.config import GarmentConfig
+from training.loop import RUN_FILE, fit, prepare_run, resolve_device, seed_everything
+
+KIND = "garment"
+
+
+def template_instance(store, garment: str) -> int:
+    """The instance of garment type ``garment`` with the most training segments."""
+    names = list(store.attrs.get("garment_type_names") or [])
+    if garment not in names:
+        raise InputError(f"unknown garment type {garment!r}; this store has: {', '.join(names)}")
+    code = names.index(garment)
+    train = store.split_segments("train")
+    counts: dict[int, int] = {}
+    for seg in train:
+        g = int(store.segment(int(seg), names=[])["garment"])
+        if int(store.garment(g)["type"]) == code:
+            counts[g] = counts.get(g, 0) + 1
+    if not counts:
+        raise InputError(f"the train split of {store.path} has no segments of a {garment}")
+    return max(counts, key=lambda g: (counts[g], -g))
+
+
+def _segments(store, split: str, g: int, names=("pose", "trans", "label", "detail")) -> SegmentDataset:
+    ds = SegmentDataset(store, split, names=names)
+    keep = [k for k, seg in enumerate(ds.segments) if int(store.segment(int(seg), names=[])["garment"]) == g]
+    ds.segments = ds.segments[keep]
+    if not len(ds):
+        raise InputError(f"the {split} split of {store.path} has no segments of garment instance {g} (the template); "
+                         "the regressor learns one template, so every split must hold it (paper-motion keeps the "
+                         "same garments in every split: split_disjoint = [motions])")
+    return ds
+
+
+class GrowingBatchSampler(torch.utils.data.Sampler):
+    """Shuffled batches of ``start`` items, ``step`` more every ``every`` epochs, at most ``most``
+    (§4.2: 10, +5 every 200 epochs, 25); Lightning calls :meth:`set_epoch`."""
+
+    def __init__(self, n: int, start: int, step: int, every: int, most: int, seed: int):
+        self.n, self.start, self.step, self.every, self.most, self.seed = n, start, step, every, most, seed
+        self.epoch = 0
+
+    def set_epoch(self, epoch: int) -> None:
+        self.epoch = int(epoch)
+
+    def batch_size(self) -> int:
+        return max(1, min(self.most, self.start + self.step * (self.epoch // self.every), self.n))
+
+    def __iter__(self):
+        g = torch.Generator().manual_seed(self.seed * 100003 + self.epoch)
+        order = torch.randperm(self.n, generator=g).tolist()
+        b = self.batch_size()
+        for k in range(0, self.n, b):
+            yield order[k:k + b]
+
+    def __len__(self) -> int:
+        return -(-self.n // self.batch_size())
+
+
+def _pretrain_bos(module, ds: SegmentDataset, config: GarmentConfig, device) -> list[float]:
+    """Fit the BOS MLP to each training sequence's last frame (§4.2); returns the loss per epoch."""
+    model = module.model
+    if model.bos is None or config.bos_epochs == 0:
+        return []
+    batch = next(iter(torch.utils.data.DataLoader(ds, batch_size=len(ds))))
+    x, g = module.targets(batch)
+    x, last = x.to(device), g[:, -1].to(device)
+    model.bos.to(device)
+    for p in model.bos.parameters():
+        p.requires_grad_(True)
+    opt = torch.optim.Adam(model.bos.parameters(), lr=config.lr)
+    losses = []
+    for _ in range(config.bos_epochs):
+        loss = torch.nn.functional.mse_loss(model.bos_frame(x), last)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(loss.detach().item())
+    for p in model.bos.parameters():
+        p.requires_grad_(False)
+    return losses
+
+
+def train_garment(data: str | Path, out: str | Path, config: GarmentConfig, *, device: str = "auto",
+                  resume: bool = False, force: bool = False) -> dict[str, Any]:
+    """Train the regressor for ``config.garment``'s template on ``data``."""
+    from training.garment.module import GarmentModule
+
+    accelerator = resolve_device(device)
+    store = open_store(data)
+    g = template_instance(store, config.garment)
+    train, val = _segments(store, "train", g), _segments(store, "val", g)
+    garment = store.garment(g)
+    meta = {"kind": KIND, "config": config.as_dict(), "template": g,
+            "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
+                      "code_version": store.attrs.get("code_version"),
+                      "schema_version": store.attrs.get("schema_version")}}
+    out = prepare_run(out, resume=resume, force=force, meta=meta)
+    seed_everything(config.seed)
+    module = GarmentModule(config.as_dict(), len(garment["rest_vertices"]), garment["faces"])
+    dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
+    bos_losses = [] if resume else _pretrain_bos(module, train, config, dev)
+    module.to("cpu")
+    sampler = GrowingBatchSampler(len(train), config.batch_size, config.batch_growth, config.growth_every,
+                                  config.max_batch_size, config.seed)
+    train_loader = torch.utils.data.DataLoader(train, batch_sampler=sampler, num_workers=config.workers,
+                                               persistent_workers=config.workers > 0,
+                                               multiprocessing_context="spawn" if config.workers > 0 else None)
+    val_loader = torch.utils.data.DataLoader(val, batch_size=min(len(val), config.max_batch_size), shuffle=False)
+    t0 = time.perf_counter()
+    result = fit(module, train_loader, val_loader, config, out, device=device, resume=resume, monitor="val/loss")
+    result |= {"seconds": time.perf_counter() - t0, "train_segments": len(train), "val_segments": len(val),
+               "template": g, "template_vertices": len(garment["rest_vertices"]),
+               "bos_pretrain_loss": bos_losses[::max(1, len(bos_losses) // 10)],
+               "parameters": sum(p.numel() for p in module.model.parameters())}
+    (out / "train_summary.json").write_text(json.dumps(result, indent=2))
+    return result
+
+
+def load_garment(run: str | Path, *, checkpoint: str = "best", data: str | Path | None = None):
+    """(module on the CPU in eval mode, run metadata, checkpoint path, store) of a regressor run."""
+    from training.garment.module import GarmentModule
+
+    run = Path(run)
+    meta_path = run / RUN_FILE
+    if not meta_path.is_file():
+        raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
+    meta = json.loads(meta_path.read_text())
+    if meta.get("kind") != KIND:
+        raise InputError(f"{run} holds a {meta.get('kind')!r} model, not paper 001's garment regressor ({KIND!r})")
+    path = run / "checkpoints" / f"{checkpoint}.ckpt"
+    if not path.is_file():
+        path = run / "checkpoints" / "last.ckpt"
+    if not path.is_file():
+        raise InputError(f"{run} has no checkpoint yet (checkpoints/best.ckpt or last.ckpt); train it first")
+    store = open_store(data or meta["store"]["path"])
+    faces = store.garment(int(meta["template"]))["faces"]
+    module = GarmentModule.load_from_checkpoint(path, map_location="cpu", faces=faces)
+    module.eval()
+    return module, meta, path, store
+
+
+def _normals(v: torch.Tensor, faces: torch.Tensor) -> torch.Tensor:
+    from datagen.geometry.features import vertex_normals
+
+    return vertex_normals(v, faces)
+
+
+@torch.no_grad()
+def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: str = "test",
+                     device: str = "auto") -> dict[str, Any]:
+    """Tables 6/7/9's figures on ``split`` for the model and the skinned template; JSON-able."""
+    from training.garment.module import template_edges
+    from training.motion.run import _hausdorff as hausdorff
+    from training.motion.sted import sted
+
+    module, meta, ckpt, store = load_garment(run, data=data)
+    dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
+    module.to(dev)
+    g = int(meta["template"])
+    faces = torch.as_tensor(np.asarray(store.garment(g)["faces"], dtype=np.int64), device=dev)
+    edges = torch.as_tensor(template_edges(store.garment(g)["faces"]), device=dev)
+    ds = _segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
+    sums = {f"{who}_{k}": 0.0 for who in ("model", "skinned") for k in ("sq", "hausdorff", "sted", "cosine")}
+    counts = {"values": 0, "frames": 0, "segments": 0}
+    scale = module.scale
+    for batch in torch.utils.data.DataLoader(ds, batch_size=4, shuffle=False):
+        batch = {k: v.to(dev) for k, v in batch.items()}
+        x, gt = module.targets(batch)
+        B, T = gt.shape[:2]
+        true = gt.reshape(B, T, -1, 3) / scale
+        pred = module.model.generate(x).float().reshape(B, T, -1, 3) / scale
+        skinned = batch["skin"].float()
+        n_true = _normals(true.reshape(B * T, -1, 3), faces)
+        for who, p in (("model", pred), ("skinned", skinned)):
+            sums[f"{who}_sq"] += float(((p - true) ** 2).sum())
+            sums[f"{who}_hausdorff"] += float(hausdorff(p.reshape(B * T, -1, 3), true.reshape(B * T, -1, 3)).sum())
+            sums[f"{who}_sted"] += float(sted(p, true, edges)["sted"].sum())
+            cos = (_normals(p.reshape(B * T, -1, 3), faces) * n_true).sum(-1)
+            sums[f"{who}_cosine"] += float(cos.mean(-1).sum())
+        counts["values"] += true.numel()
+        counts["frames"] += B * T
+        counts["segments"] += B
+    rows = {}
+    for who in ("model", "skinned"):
+        rows[who] = {"rmse": (sums[f"{who}_sq"] / counts["values"]) ** 0.5,
+                     "hausdorff": sums[f"{who}_hausdorff"] / counts["frames"],
+                     "sted": sums[f"{who}_sted"] / counts["segments"],
+                     "normal_cosine": sums[f"{who}_cosine"] / counts["frames"]}
+    garment = store.attrs["garment_type_names"][int(store.garment(g)["type"])]
+    return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "garment": garment, "template": g,
+            "segments": counts["segments"], "frames": counts["frames"], "bos": meta["config"]["bos"],
+            "model": rows["model"], "skinned_baseline": rows["skinned"]}
+
+
+def format_garment_evaluation(e: dict) -> str:
+    lines = [f"{e['garment']} (template {e['template']}, BOS {e['bos']}), {e['split']} split: {e['segments']} segments, "
+             f"{e['frames']} frames; decoded greedily from the poses", "",
+             f"{'':22s} {'RMSE (x1e-2 m)':>15s} {'Hausdorff (x1e-1 m)':>20s} {'STED (x1e-2)':>13s} "
+             f"{'normal cosine':>14s}"]
+    for name, r in (("model", e["model"]), ("skinned template", e["skinned_baseline"])):
+        lines.append(f"{name:22s} {100 * r['rmse']:15.3f} {10 * r['hausdorff']:20.3f} {100 * r['sted']:13.3f} "
+                     f"{r['normal_cosine']:14.4f}")
+    return "\n".join(lines)
