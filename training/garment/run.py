@@ -226,3 +226,58 @@ def format_garment_evaluation(e: dict) -> str:
         lines.append(f"{name:22s} {100 * r['rmse']:15.3f} {10 * r['hausdorff']:20.3f} {100 * r['sted']:13.3f} "
                      f"{r['normal_cosine']:14.4f}")
     return "\n".join(lines)
+
+
+@torch.no_grad()
+def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = None, label: str | None = None,
+                 motion_file: str | Path | None = None, seed: int = 0, device: str = "cpu") -> dict[str, Any]:
+    """Paper 001's application: a motion (new, from the generator ``motion_run`` for ``label`` and
+    ``seed``; or a motion library ``.npz`` such as an imported AMASS or BVH file), the garment
+    predicted for it by the regressor, and the body posed on the template's body shape.
+
+    Returns:
+        ``body_vertices`` [T, B, 3], ``body_faces``, ``garment_vertices`` [T, V, 3], ``garment_faces``,
+        ``fps``, ``poses`` [T, 24, 3], ``trans`` [T, 3], ``label``, ``garment`` (type), ``seconds``
+        (the regressor's time).
+    """
+    from datagen.geometry.rotations import axis_angle_to_matrix
+    from training.motion.model import frames_to_features
+    from training.motion.module import BodyLayer
+
+    if (motion_file is None) == (label is None):
+        raise InputError("give a label (with a motion-generator run) or a motion file, not both")
+    module, meta, _, store = load_garment(garment_run)
+    dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
+    module.to(dev)
+    if motion_file is not None:
+        from datagen.motion.motion import Motion
+
+        path = Path(motion_file)
+        if not path.is_file():
+            raise InputError(f"motion file {path} does not exist")
+        m = Motion.load_npz(path)
+        poses, trans, fps, label = m.poses, m.trans, float(m.fps), m.label_name
+    else:
+        if motion_run is None:
+            raise InputError("a label needs a motion-generator run (--motion-model RUN) to sample from")
+        from training.motion.run import sample_sequences
+
+        poses, trans, fps = sample_sequences(motion_run, label, 1, seed, device=device)
+        poses, trans = poses[0], trans[0]
+    poses_t = torch.as_tensor(np.asarray(poses), dtype=torch.float32, device=dev)
+    trans_t = torch.as_tensor(np.asarray(trans), dtype=torch.float32, device=dev)
+    rot = axis_angle_to_matrix(poses_t)
+    x = frames_to_features(rot[None], trans_t[None])
+    t0 = time.perf_counter()
+    garment = module.model.generate(x).float()[0].reshape(len(poses_t), -1, 3) / module.scale + trans_t[:, None]
+    seconds = time.perf_counter() - t0
+    g = int(meta["template"])
+    template = store.garment(g)
+    body = BodyLayer(store.body_model(), 1).to(dev)
+    betas = torch.as_tensor(store.betas()[int(template["body"])], dtype=torch.float32, device=dev)
+    body_vertices = body(rot, trans_t, betas[None].expand(len(rot), -1))
+    garment_type = store.attrs["garment_type_names"][int(template["type"])]
+    return {"body_vertices": body_vertices.cpu().numpy(), "body_faces": np.asarray(store.body_model()["faces"]),
+            "garment_vertices": garment.cpu().numpy(), "garment_faces": np.asarray(template["faces"]),
+            "fps": fps, "poses": np.asarray(poses), "trans": np.asarray(trans), "label": label,
+            "garment": garment_type, "seconds": seconds}

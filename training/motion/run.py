@@ -261,39 +261,53 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
                    device: str = "cpu") -> list[Path]:
     """``count`` new motions of ``label`` from a trained generator, written into the directory ``out``
     as the motion library's ``.npz`` (readable by ``drape motion export``); returns the paths."""
-    from datagen.geometry.rotations import matrix_to_axis_angle
     from datagen.motion.motion import Motion
-    from training.motion.model import features_to_frames
 
     if count < 1:
         raise InputError(f"--count must be 1 or more, got {count}")
     if seed < 0:
         raise InputError(f"--seed must be 0 or more, got {seed}")
-    module, meta, ckpt, _ = load_motion(run)
-    labels = meta["labels"]
-    if label not in labels:
-        raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out} is a file; give a directory for the motions")
     if not out.parent.is_dir():
         raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
-    accelerator = resolve_device(device)
-    module.to(torch.device("cuda" if accelerator == "gpu" else "cpu"))
-    g = torch.Generator().manual_seed(int(seed))
-    code = labels.index(label)
-    x = module.model.sample(torch.full((count,), code, dtype=torch.long, device=module.device), meta["frames"],
-                            generator=g).float()
-    rot, trans = features_to_frames(x)
-    poses = matrix_to_axis_angle(rot).cpu().numpy().astype(np.float64)
-    trans = (trans - trans[:, :1]).cpu().numpy().astype(np.float64)  # every motion starts at the origin
+    poses, trans, fps = sample_sequences(run, label, count, seed, device=device)
+    _, meta, ckpt, _ = load_motion(run)
+    code = meta["labels"].index(label)
     out.mkdir(exist_ok=True)
     paths = []
     for k in range(count):
-        motion = Motion(poses=poses[k], trans=trans[k], fps=meta["fps"], label=code, label_name=label,
+        motion = Motion(poses=poses[k], trans=trans[k], fps=fps, label=code, label_name=label,
                         source={"kind": "generated", "model": KIND, "run": str(Path(run).resolve()),
                                 "checkpoint": ckpt.name, "seed": int(seed), "index": k})
         path = out / f"{label}_{seed}_{k:03d}.npz"
         motion.save_npz(path)
         paths.append(path)
     return paths
+
+
+@torch.no_grad()
+def sample_sequences(run: str | Path, label: str, count: int, seed: int, *, device: str = "cpu"
+                     ) -> tuple[np.ndarray, np.ndarray, float]:
+    """``count`` new motions of ``label``: poses [count, T, 24, 3] (axis-angle), translations
+    [count, T, 3] starting at the origin, and the frame rate; reproducible from ``seed``."""
+    from datagen.geometry.rotations import matrix_to_axis_angle
+    from training.motion.model import features_to_frames
+
+    if count < 1:
+        raise InputError(f"--count must be 1 or more, got {count}")
+    if seed < 0:
+        raise InputError(f"--seed must be 0 or more, got {seed}")
+    module, meta, _, _ = load_motion(run)
+    labels = meta["labels"]
+    if label not in labels:
+        raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
+    module.to(torch.device("cuda" if resolve_device(device) == "gpu" else "cpu"))
+    g = torch.Generator().manual_seed(int(seed))
+    x = module.model.sample(torch.full((count,), labels.index(label), dtype=torch.long, device=module.device),
+                            meta["frames"], generator=g).float()
+    rot, trans = features_to_frames(x)
+    poses = matrix_to_axis_angle(rot).cpu().numpy().astype(np.float64)
+    trans = (trans - trans[:, :1]).cpu().numpy().astype(np.float64)  # every motion starts at the origin
+    return poses, trans, float(meta["fps"])
