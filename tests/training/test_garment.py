@@ -150,3 +150,52 @@ def test_a_sampled_motion_is_dressed_into_one_valid_usd(motion_store, garment_ru
     assert Motion.load_npz(motion_file).frame_count == 3
     assert main(["sample", "clothed", "--garment-model", str(run), "--out", str(tmp_path / "x.usda")]) == 2
     assert "give a label" in capsys.readouterr().err
+
+
+def test_contact_signs_loss_and_push_out_on_a_sphere():
+    """A sphere of radius 1 as the body: points inside have negative signed distance, eq. 4's loss
+    is their depth, and the push-out puts every point at the margin or beyond."""
+    import trimesh
+
+    from training.garment.contact import body_contact, collision_loss, inside_share, push_out, signed_distance
+
+    sphere = trimesh.creation.icosphere(subdivisions=3)
+    body = torch.as_tensor(sphere.vertices, dtype=torch.float32)[None]
+    faces = torch.as_tensor(sphere.faces, dtype=torch.int64)
+    dirs = torch.nn.functional.normalize(torch.randn(1, 200, 3, generator=torch.Generator().manual_seed(0)), dim=-1)
+    radii = torch.linspace(0.8, 1.2, 200)[None, :, None]
+    pts = dirs * radii
+    closest, normal = body_contact(pts, body, faces)
+    d = signed_distance(pts, closest, normal)
+    assert torch.allclose(d, radii[..., 0] - 1.0, atol=0.02)  # the sphere's signed distance, to the mesh's error
+    assert abs(inside_share(pts, closest, normal) - 0.5) < 0.03
+    assert abs(collision_loss(pts, closest, normal).item() - torch.relu(1.0 - radii).mean().item()) < 0.01
+    out = push_out(pts, closest, normal, margin=0.01)
+    c2, n2 = body_contact(out, body, faces)
+    assert signed_distance(out, c2, n2).min() > 0.0 and inside_share(out, c2, n2) == 0.0
+
+
+def test_refinement_writes_a_run_and_reports_interpenetration(motion_store, garment_run, tmp_path, capsys):
+    from datagen.cli import main
+    from training.garment.run import evaluate_garment
+    from training.motion.config import MotionConfig
+    from training.motion.run import train_motion
+
+    run, _ = garment_run
+    motion_run = tmp_path / "motion"
+    train_motion(motion_store, motion_run, MotionConfig(epochs=1, batch_size=2, d_model=16, heads=2, layers=1,
+                                                        feedforward=32, label_hidden=8, vertex_stride=50,
+                                                        precision="32"), device="cpu")
+    out = tmp_path / "refined"
+    assert main(["train", "refine", "--garment-model", str(run), "--motion-model", str(motion_run), "--out", str(out),
+                 "--samples", "4", "--steps", "5", "--device", "cpu"]) == 0
+    printed = capsys.readouterr().out
+    assert "inside the body on" in printed and (out / "checkpoints" / "best.ckpt").is_file()
+    summary = json.loads((out / "refine_summary.json").read_text())
+    assert 0 <= summary["inside_share_before"] <= 1 and 0 <= summary["inside_share_after"] <= 1
+    assert json.loads((out / "run.json").read_text())["refined_from"] == str(run.resolve())
+    e = evaluate_garment(out, split="test", device="cpu")  # the refined run is a regressor run like any other
+    assert np.isfinite(e["model"]["rmse"])
+    assert main(["train", "refine", "--garment-model", str(run), "--motion-model", str(motion_run), "--out", str(out),
+                 "--samples", "4", "--steps", "5"]) == 2
+    assert "exists and is not empty" in capsys.readouterr().err

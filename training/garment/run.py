@@ -230,7 +230,8 @@ def format_garment_evaluation(e: dict) -> str:
 
 @torch.no_grad()
 def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = None, label: str | None = None,
-                 motion_file: str | Path | None = None, seed: int = 0, device: str = "cpu") -> dict[str, Any]:
+                 motion_file: str | Path | None = None, seed: int = 0, device: str = "cpu",
+                 push_out_margin: float | None = 0.002) -> dict[str, Any]:
     """Paper 001's application: a motion (new, from the generator ``motion_run`` for ``label`` and
     ``seed``; or a motion library ``.npz`` such as an imported AMASS or BVH file), the garment
     predicted for it by the regressor, and the body posed on the template's body shape.
@@ -238,8 +239,11 @@ def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = Non
     Returns:
         ``body_vertices`` [T, B, 3], ``body_faces``, ``garment_vertices`` [T, V, 3], ``garment_faces``,
         ``fps``, ``poses`` [T, 24, 3], ``trans`` [T, 3], ``label``, ``garment`` (type), ``seconds``
-        (the regressor's time).
+        (the regressor's time), ``inside_share_predicted`` and ``inside_share`` (garment vertices
+        inside the body before and after the push-out post-process, which moves them out along the
+        body normal to ``push_out_margin`` metres; None: no post-process).
     """
+    from training.garment.contact import body_contact, inside_share, push_out
     from datagen.geometry.rotations import axis_angle_to_matrix
     from training.motion.model import frames_to_features
     from training.motion.module import BodyLayer
@@ -276,8 +280,14 @@ def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = Non
     body = BodyLayer(store.body_model(), 1).to(dev)
     betas = torch.as_tensor(store.betas()[int(template["body"])], dtype=torch.float32, device=dev)
     body_vertices = body(rot, trans_t, betas[None].expand(len(rot), -1))
+    body_faces = torch.as_tensor(np.asarray(store.body_model()["faces"], dtype=np.int64), device=dev)
+    closest, normal = body_contact(garment, body_vertices, body_faces)
+    predicted_inside = inside_share(garment, closest, normal)
+    if push_out_margin is not None:
+        garment = push_out(garment, closest, normal, push_out_margin)
     garment_type = store.attrs["garment_type_names"][int(template["type"])]
     return {"body_vertices": body_vertices.cpu().numpy(), "body_faces": np.asarray(store.body_model()["faces"]),
             "garment_vertices": garment.cpu().numpy(), "garment_faces": np.asarray(template["faces"]),
             "fps": fps, "poses": np.asarray(poses), "trans": np.asarray(trans), "label": label,
-            "garment": garment_type, "seconds": seconds}
+            "garment": garment_type, "seconds": seconds, "inside_share_predicted": predicted_inside,
+            "inside_share": inside_share(garment, *body_contact(garment, body_vertices, body_faces))}
