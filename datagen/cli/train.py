@@ -87,6 +87,9 @@ def register(sub, formatter) -> None:
     s.add_argument("--count", type=int, default=8)
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--out", required=True, help="a directory for the .npz files")
+    s.add_argument("--frames", type=int, default=None,
+                   help="frames per motion (default: the segment length it was trained on). `drape generate` "
+                        "with file: motions needs the recorded frames plus the ramp (e.g. 75 for 60 recorded)")
     s.add_argument("--device", default="cpu", help="cpu, cuda or auto")
     s.set_defaults(func=_cmd_sample_motion)
     c = samplers.add_parser("clothed", formatter_class=formatter, help="a body animation dressed by the regressor",
@@ -216,7 +219,8 @@ def _cmd_sample_motion(args) -> int:
     from training.motion.run import sample_motions
 
     t0 = time.perf_counter()
-    paths = sample_motions(args.run, args.label, args.count, args.seed, args.out, device=args.device)
+    paths = sample_motions(args.run, args.label, args.count, args.seed, args.out, device=args.device,
+                           frames=args.frames)
     print(f"wrote {len(paths)} {args.label} motions into {args.out} ({time.perf_counter() - t0:.1f} s): "
           f"{paths[0].name} .. {paths[-1].name}; e.g. drape motion export {paths[0]} --format bvh --out "
           f"{paths[0].with_suffix('.bvh')}")

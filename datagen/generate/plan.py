@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.generate.config import DatasetConfig, parse_body, parse_garment, parse_motion
+from datagen.generate.config import DatasetConfig, motion_file, parse_body, parse_garment, parse_motion
 
 SPLIT_CODES = {"train": 0, "val": 1, "test": 2}
 
@@ -77,8 +77,11 @@ class Plan:
     def motion(self, m: int):
         from datagen.motion.library import make_motion
 
-        label, seed = parse_motion(self.motions[m])
         frames = self.run_config.motion_frames(self.config.frames, self.config.fps)
+        path = motion_file(self.motions[m])
+        if path is not None:
+            return load_motion_file(path, frames, self.config.fps)
+        label, seed = parse_motion(self.motions[m])
         return make_motion(label, seed=seed, frames=frames, fps=self.config.fps)
 
     @property
@@ -140,7 +143,7 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
     body["subdivision_edges"] = edges
     body["subdivided_faces"] = fine.faces.astype(np.int32)
     motions = [plan.motion(i) for i in range(len(plan.motions))]
-    motion_arrays = {"label": np.array([LABELS.index(parse_motion(s)[0]) for s in plan.motions], np.int32),
+    motion_arrays = {"label": np.array([mo.label for mo in motions], np.int32),
                      "seed": np.array([parse_motion(s)[1] for s in plan.motions], np.int32),
                      "frame_count": np.array([mo.frame_count for mo in motions], np.int32)}
     garments = [plan.garment(g) for g in range(len(plan.instances))]
@@ -212,6 +215,41 @@ def _area(v: np.ndarray, f: np.ndarray) -> float:
     return float(0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum())
 
 
+def load_motion_file(path: Path, frames: int, fps: float):
+    """A motion file as a scene's motion: resampled to ``fps``, its first ``frames`` frames, its
+    label as drape's class (-1 when the name is not one of drape's labels)."""
+    from dataclasses import replace
+
+    from datagen.errors import InputError
+    from datagen.motion.labels import LABELS
+    from datagen.motion.motion import Motion
+
+    m = Motion.load_npz(path)
+    if abs(m.fps - fps) > 1e-6:
+        m = m.resample(fps)
+    if m.frame_count < frames:
+        raise InputError(f"motion file {path} has {m.frame_count} frames at {fps:g} fps; a scene of this config needs "
+                         f"{frames} (the recorded frames and the ramp into the motion): lower frames or give a "
+                         "longer motion (drape sample motion samples the length it was trained on)")
+    label = LABELS.index(m.label_name) if m.label_name in LABELS else -1
+    return replace(m, poses=m.poses[:frames], trans=m.trans[:frames], label=label)
+
+
+def input_digest(plan: Plan) -> str:
+    """A 16-hex-digit digest of the motion files a plan reads ("" when it reads none): part of the
+    store's identity, so a store is never resumed with a changed motion file."""
+    import hashlib
+
+    files = [motion_file(m) for m in plan.motions if motion_file(m) is not None]
+    if not files:
+        return ""
+    h = hashlib.blake2b(digest_size=8)
+    for f in files:
+        h.update(str(f).encode())
+        h.update(Path(f).read_bytes())
+    return h.hexdigest()
+
+
 def open_writer(plan: Plan, out: str | Path):
     """The store ``out`` for ``plan`` (created, or reopened when its identity matches: the config
     without execution-only fields, the code version, seed, sample count and segment length)."""
@@ -219,7 +257,9 @@ def open_writer(plan: Plan, out: str | Path):
     from datagen.store import StoreWriter
 
     config = plan.config
-    return StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=code_version(),
+    inputs = input_digest(plan)
+    version = code_version() + (f"+inputs-{inputs}" if inputs else "")
+    return StoreWriter.open(out, config=identity_config(config.as_dict()), code_version=version,
                             seed=config.seed, sample_count=plan.sample_count, segment_length=config.segment_length)
 
 

@@ -91,7 +91,8 @@ def simulated_frames(plan) -> int:
 
 def preflight(plan, out: str | Path, *, executor: str, device: str | None, workers: int | None) -> None:
     """Everything that can be checked before the store directory is created: the output path, the
-    worker count, the device (local executor), host memory for a batch and disk for the run.
+    worker count, the device (local executor), motion files, host memory for a batch and disk for
+    the run.
 
     Raises:
         InputError: with what is wrong, the figures, and what to do.
@@ -105,6 +106,9 @@ def preflight(plan, out: str | Path, *, executor: str, device: str | None, worke
         from datagen.sim.scene import warp_device
 
         warp_device(device)
+    for m, entry in enumerate(plan.motions):  # motion files: long enough at the config's frame rate
+        if entry.startswith("file:"):
+            plan.motion(m)
     c = plan.config
     batch = min(c.simulation.batch_size, plan.sample_count)
     frames = simulated_frames(plan)

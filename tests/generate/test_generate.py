@@ -254,3 +254,36 @@ def test_config_errors_say_what_is_wrong():
         resolve_config(preset=name)
     # paper 001 never uses α: its preset fits none (with one body per split it could not)
     assert resolve_config(preset="paper-motion").fit_attribute is False
+
+
+def test_motion_files_are_a_motion_source(tmp_path):
+    """``file:PATH`` motions (e.g. the motion generator's samples): the store holds them with their
+    label and seed -1; a changed file is not resumed; a file too short is refused before anything
+    is written."""
+    from datagen.motion.library import make_motion
+    from datagen.store.layout import read_root_attributes
+
+    long = tmp_path / "walk.npz"
+    make_motion("walk", seed=5, frames=40, fps=30.0).save_npz(long)
+    short = tmp_path / "short.npz"
+    make_motion("squat", seed=1, frames=4, fps=30.0).save_npz(short)
+    one = {"garments": ["skirt:0"], "bodies": ["regular"]}
+    cfg = {**MICRO, "fit_attribute": False, "split_disjoint": ["motions"],
+           "train": {**one, "motions": [f"file:{long}"]}, "test": {**one, "motions": ["wave:1"]}}
+    out = tmp_path / "files.zarr"
+    generate(load_config(DatasetConfig, cfg), out)
+    store = open_store(out)
+    motions = store.motions()
+    assert motions["seed"].tolist() == [-1, 1] and store.attrs["label_names"][motions["label"][0]] == "walk"
+    assert "+inputs-" in read_root_attributes(out)["code_version"]
+    s = store.frames(0, names=["label"])
+    assert (s["label"] == motions["label"][0]).all()
+    make_motion("walk", seed=6, frames=40, fps=30.0).save_npz(long)  # another file under the same name
+    with pytest.raises(InputError):
+        generate(load_config(DatasetConfig, cfg), out)
+    bad = {**cfg, "train": {**one, "motions": [f"file:{short}"]}}
+    with pytest.raises(InputError, match="has 4 frames at 30 fps; a scene of this config needs"):
+        generate(load_config(DatasetConfig, bad), tmp_path / "short.zarr")
+    assert not (tmp_path / "short.zarr").exists()
+    with pytest.raises(ConfigError, match="does not exist"):
+        load_config(DatasetConfig, {**cfg, "train": {**one, "motions": [f"file:{tmp_path / 'none.npz'}"]}})

@@ -108,6 +108,10 @@ def test_sampled_motions_are_library_motions_that_export(motion_run, tmp_path, c
     again = tmp_path / "again"
     assert main(["sample", "motion", str(run), "--label", "walk", "--count", "3", "--seed", "4", "--out", str(again)]) == 0
     assert np.array_equal(Motion.load_npz(again / files[0].name).poses, m.poses)  # the seed decides
+    longer = tmp_path / "longer"
+    assert main(["sample", "motion", str(run), "--label", "walk", "--count", "1", "--frames", "20", "--out",
+                 str(longer)]) == 0
+    assert Motion.load_npz(next(longer.glob("*.npz"))).frame_count == 20
     bvh = tmp_path / "g.bvh"
     assert main(["motion", "export", str(files[0]), "--format", "bvh", "--out", str(bvh)]) == 0 and bvh.is_file()
 

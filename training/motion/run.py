@@ -258,7 +258,7 @@ def format_motion_evaluation(e: dict) -> str:
 
 
 def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str | Path, *,
-                   device: str = "cpu") -> list[Path]:
+                   device: str = "cpu", frames: int | None = None) -> list[Path]:
     """``count`` new motions of ``label`` from a trained generator, written into the directory ``out``
     as the motion library's ``.npz`` (readable by ``drape motion export``); returns the paths."""
     from datagen.motion.motion import Motion
@@ -272,7 +272,7 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
         raise InputError(f"--out {out} is a file; give a directory for the motions")
     if not out.parent.is_dir():
         raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
-    poses, trans, fps = sample_sequences(run, label, count, seed, device=device)
+    poses, trans, fps = sample_sequences(run, label, count, seed, device=device, frames=frames)
     _, meta, ckpt, _ = load_motion(run)
     code = meta["labels"].index(label)
     out.mkdir(exist_ok=True)
@@ -288,10 +288,12 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
 
 
 @torch.no_grad()
-def sample_sequences(run: str | Path, label: str, count: int, seed: int, *, device: str = "cpu"
-                     ) -> tuple[np.ndarray, np.ndarray, float]:
+def sample_sequences(run: str | Path, label: str, count: int, seed: int, *, device: str = "cpu",
+                     frames: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
     """``count`` new motions of ``label``: poses [count, T, 24, 3] (axis-angle), translations
-    [count, T, 3] starting at the origin, and the frame rate; reproducible from ``seed``."""
+    [count, T, 3] starting at the origin, and the frame rate; reproducible from ``seed``. ``frames``
+    (default: the segment length it was trained on) may ask for longer motions: the decoder's
+    positions extend, but it has only learned the trained length."""
     from datagen.geometry.rotations import matrix_to_axis_angle
     from training.motion.model import features_to_frames
 
@@ -303,10 +305,12 @@ def sample_sequences(run: str | Path, label: str, count: int, seed: int, *, devi
     labels = meta["labels"]
     if label not in labels:
         raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
+    if frames is not None and not 1 <= frames <= 100000:
+        raise InputError(f"--frames must be between 1 and 100000, got {frames}")
     module.to(torch.device("cuda" if resolve_device(device) == "gpu" else "cpu"))
     g = torch.Generator().manual_seed(int(seed))
     x = module.model.sample(torch.full((count,), labels.index(label), dtype=torch.long, device=module.device),
-                            meta["frames"], generator=g).float()
+                            frames or meta["frames"], generator=g).float()
     rot, trans = features_to_frames(x)
     poses = matrix_to_axis_angle(rot).cpu().numpy().astype(np.float64)
     trans = (trans - trans[:, :1]).cpu().numpy().astype(np.float64)  # every motion starts at the origin
