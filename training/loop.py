@@ -55,6 +55,7 @@ def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, A
     """Create the run directory (or check the one there for ``resume``); never overwrite silently."""
     out = Path(out)
     run_file = out / RUN_FILE
+    meta = json.loads(json.dumps(meta))  # as the file holds it (tuples become lists)
     if int(os.environ.get("RANK", "0")) > 0:  # torchrun: rank 0 checks and creates; the others wait for it
         import time
 
@@ -122,8 +123,10 @@ def _throughput_callback():
 
 
 def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, device: str = "auto",
-        resume: bool = False, monitor: str = "val/detail_mm") -> dict[str, Any]:
-    """Train ``module`` with Lightning; returns the best validation value and the checkpoint paths."""
+        resume: bool = False, monitor: str = "val/detail_mm", distributed_sampler: bool = True) -> dict[str, Any]:
+    """Train ``module`` with Lightning; returns the best validation value and the checkpoint paths.
+    ``distributed_sampler=False`` when the loader's own sampler shares batches out between DDP
+    processes (Lightning otherwise puts a ``DistributedSampler`` in)."""
     import pytorch_lightning as pl
     from pytorch_lightning.callbacks import EarlyStopping, LearningRateMonitor, ModelCheckpoint
     from pytorch_lightning.loggers import CSVLogger, TensorBoardLogger
@@ -153,7 +156,7 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
         logger=[TensorBoardLogger(out / "logs", name="tensorboard", version=""),
                 CSVLogger(out / "logs", name="csv", version=f"attempt-{len(list((out / 'logs' / 'csv').glob('attempt-*')))}")],
         max_time=None if config.max_minutes is None else {"minutes": config.max_minutes},
-        log_every_n_steps=1, deterministic=False, enable_model_summary=False,
+        log_every_n_steps=1, deterministic=False, enable_model_summary=False, use_distributed_sampler=distributed_sampler,
         gradient_clip_val=1.0)
     trainer.fit(module, train_loader, val_loader,
                 ckpt_path=str(out / "checkpoints" / "last.ckpt") if resume and (out / "checkpoints" / "last.ckpt").is_file()

@@ -187,3 +187,13 @@ def test_handshake_matching_is_a_matching_of_graph_edges_and_pooling_round_trips
     assert n / 2 <= px.shape[0] < n and pe.max() < px.shape[0]
     ux, ue, ub = pool.unpool(px, info)
     assert ux.shape == x.shape and torch.equal(ue, edges)
+
+
+def test_ablations_keep_the_full_models_size():
+    """§5.3 compares architectures: the variants that replace a part by another (one branch, one
+    step, no pooling) keep the full model's parameters within 5 %; ``no_parser`` drops the parser
+    network and ``concat_parser`` doubles the branches' input, by construction."""
+    size = {a: sum(p.numel() for p in DetailAwareGNN(ablation=a).parameters()) for a in ABLATIONS}
+    for ablation in ("no_decomposition", "output_limit", "single_step", "no_pooling"):
+        assert abs(size[ablation] / size["full"] - 1) < 0.05, (ablation, size)
+    assert size["no_parser"] < size["full"] < size["concat_parser"]

@@ -58,10 +58,14 @@ def _segments(store, split: str, g: int, names=("pose", "trans", "label", "detai
 
 class GrowingBatchSampler(torch.utils.data.Sampler):
     """Shuffled batches of ``start`` items, ``step`` more every ``every`` epochs, at most ``most``
-    (§4.2: 10, +5 every 200 epochs, 25); Lightning calls :meth:`set_epoch`."""
+    (§4.2: 10, +5 every 200 epochs, 25); Lightning calls :meth:`set_epoch`. Under DDP (``world``
+    processes) these are global batches: every process draws the same order and takes its share
+    (``rank::world``) of each, and a last batch too small to give every process an item is dropped."""
 
-    def __init__(self, n: int, start: int, step: int, every: int, most: int, seed: int):
+    def __init__(self, n: int, start: int, step: int, every: int, most: int, seed: int, *, rank: int = 0,
+                 world: int = 1):
         self.n, self.start, self.step, self.every, self.most, self.seed = n, start, step, every, most, seed
+        self.rank, self.world = rank, world
         self.epoch = 0
 
     def set_epoch(self, epoch: int) -> None:
@@ -75,10 +79,13 @@ class GrowingBatchSampler(torch.utils.data.Sampler):
         order = torch.randperm(self.n, generator=g).tolist()
         b = self.batch_size()
         for k in range(0, self.n, b):
-            yield order[k:k + b]
+            batch = order[k:k + b]
+            if len(batch) >= self.world:
+                yield batch[self.rank::self.world]
 
     def __len__(self) -> int:
-        return -(-self.n // self.batch_size())
+        b = self.batch_size()
+        return sum(1 for k in range(0, self.n, b) if min(b, self.n - k) >= self.world)
 
 
 def _pretrain_bos(module, ds: SegmentDataset, config: GarmentConfig, device) -> list[float]:
@@ -125,14 +132,18 @@ def train_garment(data: str | Path, out: str | Path, config: GarmentConfig, *, d
     dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
     bos_losses = [] if resume else _pretrain_bos(module, train, config, dev)
     module.to("cpu")
+    import os
+
     sampler = GrowingBatchSampler(len(train), config.batch_size, config.batch_growth, config.growth_every,
-                                  config.max_batch_size, config.seed)
+                                  config.max_batch_size, config.seed, rank=int(os.environ.get("RANK", "0")),
+                                  world=int(os.environ.get("WORLD_SIZE", "1")))
     train_loader = torch.utils.data.DataLoader(train, batch_sampler=sampler, num_workers=config.workers,
                                                persistent_workers=config.workers > 0,
                                                multiprocessing_context="spawn" if config.workers > 0 else None)
     val_loader = torch.utils.data.DataLoader(val, batch_size=min(len(val), config.max_batch_size), shuffle=False)
     t0 = time.perf_counter()
-    result = fit(module, train_loader, val_loader, config, out, device=device, resume=resume, monitor="val/loss")
+    result = fit(module, train_loader, val_loader, config, out, device=device, resume=resume, monitor="val/loss",
+                 distributed_sampler=False)  # the growing sampler shares each global batch out itself
     result |= {"seconds": time.perf_counter() - t0, "train_segments": len(train), "val_segments": len(val),
                "template": g, "template_vertices": len(garment["rest_vertices"]),
                "bos_pretrain_loss": bos_losses[::max(1, len(bos_losses) // 10)],
