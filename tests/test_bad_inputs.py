@@ -12,22 +12,14 @@ interrupted before pack).
 from __future__ import annotations
 
 import json
-import shutil
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from tests.generate.test_generate import MICRO
 from tests.motion.test_bvh import cmu_skeleton, write_bvh_text
 from tests.store import stage_loop as sl
-
-MICRO = {
-    "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07,
-    "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
-                   "solver": {"substeps": 3, "iterations": 3}},
-    "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
-    "test": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},
-}
 
 
 def _bvh(path: Path, drop: tuple[str, ...] = (), scale: float = 1.0) -> Path:

@@ -167,6 +167,25 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
             "world_size": trainer.world_size, "train_samples_per_second": throughput.rates}
 
 
+def run_checkpoint(run: str | Path, kind: str, model: str, *, checkpoint: str = "best") -> tuple[dict, Path]:
+    """(run.json, checkpoint path) of a run directory of model ``kind``, the ``checkpoint``
+    (``best``, else ``last``); one-line errors for a directory that is not a run, a run of another
+    model (``model`` names the expected one) and a run without a checkpoint."""
+    run = Path(run)
+    meta_path = run / RUN_FILE
+    if not meta_path.is_file():
+        raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
+    meta = json.loads(meta_path.read_text())
+    if meta.get("kind") != kind:
+        raise InputError(f"{run} holds a {meta.get('kind')!r} model, not {model} ({kind!r})")
+    path = run / "checkpoints" / f"{checkpoint}.ckpt"
+    if not path.is_file():
+        path = run / "checkpoints" / "last.ckpt"
+    if not path.is_file():
+        raise InputError(f"{run} has no checkpoint yet (checkpoints/best.ckpt or last.ckpt); train it first")
+    return meta, path
+
+
 def read_metrics(run: str | Path, key: str) -> dict[int, float]:
     """Epoch -> the last logged value of ``key`` over every attempt of a run (a later attempt wins)."""
     import csv

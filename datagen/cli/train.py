@@ -7,6 +7,17 @@ import sys
 from pathlib import Path
 
 
+def _run_arguments(p, config_class: str) -> None:
+    """The arguments every `drape train MODEL` takes."""
+    p.add_argument("--data", required=True, help="the dataset store")
+    p.add_argument("--out", required=True, help="the run directory")
+    p.add_argument("--config", default=None, help=f"training config (.toml/.yaml/.json; fields of {config_class})")
+    p.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
+    p.add_argument("--device", default="auto", help="cpu, cuda or auto")
+    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    p.add_argument("--force", action="store_true", help="replace the run in --out")
+
+
 def register(sub, formatter) -> None:
     p = sub.add_parser("train", formatter_class=formatter, help="train a model on a dataset store",
                        description="Train one of drape's models on a store's train split, choosing the checkpoint "
@@ -17,14 +28,8 @@ def register(sub, formatter) -> None:
                        "  torchrun --nproc-per-node 2 -m datagen.cli train gnn --data small.zarr --out runs/ddp")
     models = p.add_subparsers(dest="model", metavar="MODEL", required=True)
     g = models.add_parser("gnn", formatter_class=formatter, help="paper 000's detail-aware GNN")
-    g.add_argument("--data", required=True, help="the dataset store")
-    g.add_argument("--out", required=True, help="the run directory")
-    g.add_argument("--config", default=None, help="training config (.toml/.yaml; fields of training.config.TrainConfig)")
+    _run_arguments(g, "training.config.TrainConfig")
     g.add_argument("--ablation", default=None, help="a variant of paper 000 §5.3 (overrides the config)")
-    g.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
-    g.add_argument("--device", default="auto", help="cpu, cuda or auto")
-    g.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
-    g.add_argument("--force", action="store_true", help="replace the run in --out")
     g.set_defaults(func=_cmd_train_gnn)
     m = models.add_parser("motion", formatter_class=formatter, help="paper 001's Transformer-CVAE motion generator",
                           description="Train paper 001's label-conditioned motion generator (§3.2) on a store's "
@@ -32,15 +37,8 @@ def register(sub, formatter) -> None:
                           "val split's loss.",
                           epilog="examples:\n  drape train motion --data motion.zarr --out runs/motion --device cuda\n"
                           "  drape train motion --data motion.zarr --out runs/no-vertex --no-vertex-loss")
-    m.add_argument("--data", required=True, help="the dataset store")
-    m.add_argument("--out", required=True, help="the run directory")
-    m.add_argument("--config", default=None,
-                   help="training config (.toml/.yaml/.json; fields of training.motion.config.MotionConfig)")
+    _run_arguments(m, "training.motion.config.MotionConfig")
     m.add_argument("--no-vertex-loss", action="store_true", help="train without L_V^B (Table 8's ablation)")
-    m.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
-    m.add_argument("--device", default="auto", help="cpu, cuda or auto")
-    m.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
-    m.add_argument("--force", action="store_true", help="replace the run in --out")
     m.set_defaults(func=_cmd_train_motion)
     f = models.add_parser("refine", formatter_class=formatter, help="paper 001's collision refinement of a regressor",
                           description="Fine-tune a garment regressor on motions sampled from a motion generator with "
@@ -64,16 +62,9 @@ def register(sub, formatter) -> None:
                           "decoder with a learnable BOS (pretrained, then frozen), vertex and Laplacian losses.",
                           epilog="examples:\n  drape train garment --data motion.zarr --garment skirt --out runs/skirt\n"
                           "  drape train garment --data motion.zarr --garment skirt --out runs/skirt-zero-bos --zero-bos")
-    r.add_argument("--data", required=True, help="the dataset store")
-    r.add_argument("--out", required=True, help="the run directory")
+    _run_arguments(r, "training.garment.config.GarmentConfig")
     r.add_argument("--garment", default=None, help="the garment type (overrides the config; default skirt)")
-    r.add_argument("--config", default=None,
-                   help="training config (.toml/.yaml/.json; fields of training.garment.config.GarmentConfig)")
     r.add_argument("--zero-bos", action="store_true", help="a fixed zero BOS instead of the learned one (Table 9)")
-    r.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
-    r.add_argument("--device", default="auto", help="cpu, cuda or auto")
-    r.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
-    r.add_argument("--force", action="store_true", help="replace the run in --out")
     r.set_defaults(func=_cmd_train_garment)
 
     p = sub.add_parser("sample", formatter_class=formatter, help="new motions from a trained generator",

@@ -23,7 +23,7 @@ from datagen.errors import InputError
 from datagen.store import open_store
 from training.data import SegmentDataset
 from training.garment.config import GarmentConfig
-from training.loop import RUN_FILE, fit, prepare_run, resolve_device, seed_everything
+from training.loop import fit, prepare_run, resolve_device, run_checkpoint, seed_everything
 
 KIND = "garment"
 
@@ -156,18 +156,7 @@ def load_garment(run: str | Path, *, checkpoint: str = "best", data: str | Path 
     """(module on the CPU in eval mode, run metadata, checkpoint path, store) of a regressor run."""
     from training.garment.module import GarmentModule
 
-    run = Path(run)
-    meta_path = run / RUN_FILE
-    if not meta_path.is_file():
-        raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
-    meta = json.loads(meta_path.read_text())
-    if meta.get("kind") != KIND:
-        raise InputError(f"{run} holds a {meta.get('kind')!r} model, not paper 001's garment regressor ({KIND!r})")
-    path = run / "checkpoints" / f"{checkpoint}.ckpt"
-    if not path.is_file():
-        path = run / "checkpoints" / "last.ckpt"
-    if not path.is_file():
-        raise InputError(f"{run} has no checkpoint yet (checkpoints/best.ckpt or last.ckpt); train it first")
+    meta, path = run_checkpoint(run, KIND, "paper 001's garment regressor", checkpoint=checkpoint)
     store = open_store(data or meta["store"]["path"])
     faces = store.garment(int(meta["template"]))["faces"]
     module = GarmentModule.load_from_checkpoint(path, map_location="cpu", faces=faces)

@@ -23,7 +23,7 @@ from datagen.errors import InputError
 from datagen.store import open_store
 from training.config import TrainConfig
 from training.data import FrameDataset
-from training.loop import RUN_FILE, fit, prepare_run, resolve_device, seed_everything
+from training.loop import fit, prepare_run, resolve_device, run_checkpoint, seed_everything
 
 KIND = "gnn"
 
@@ -79,18 +79,7 @@ def load_module(run: str | Path, *, checkpoint: str = "best"):
     """The trained module of a run directory (``best`` or ``last`` checkpoint), on the CPU, in eval mode."""
     from training.gnn.module import GNNModule
 
-    run = Path(run)
-    meta_path = run / RUN_FILE
-    if not meta_path.is_file():
-        raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
-    meta = json.loads(meta_path.read_text())
-    if meta.get("kind") != KIND:
-        raise InputError(f"{run} holds a {meta.get('kind')!r} model, not paper 000's {KIND!r}")
-    path = run / "checkpoints" / f"{checkpoint}.ckpt"
-    if not path.is_file():
-        path = run / "checkpoints" / "last.ckpt"
-    if not path.is_file():
-        raise InputError(f"{run} has no checkpoint yet (checkpoints/best.ckpt or last.ckpt); train it first")
+    meta, path = run_checkpoint(run, KIND, "paper 000's GNN", checkpoint=checkpoint)
     module = GNNModule.load_from_checkpoint(path, map_location="cpu")
     module.eval()
     return module, meta, path
