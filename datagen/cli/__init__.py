@@ -50,6 +50,9 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+_WARP_COMMANDS = frozenset({"garment", "simulate", "generate", "export", "preview", "predict"})
+"""Commands that run warp kernels (initialised quietly up front)."""
+
 _RESUME_HINTS = {
     "generate": "what was staged is kept: run the same command again and it resumes from there",
     "train": "the last finished epoch is in checkpoints/last.ckpt: run the same command with --resume to continue",
@@ -64,9 +67,9 @@ def main(argv: list[str] | None = None) -> int:
         logging.getLogger(noisy).setLevel(max(logging.WARNING, logging.getLogger().level))
     if args.log_level != "debug":  # warp's banner, kernel-compile lines and CPU-only driver notice: debug only
         try:
-            from datagen.export.animation import quiet_warp
+            from datagen.sim.scene import quiet_warp
 
-            quiet_warp(logging.ERROR)
+            quiet_warp(logging.ERROR, initialise=args.command in _WARP_COMMANDS)
         except ImportError:  # warp missing: the commands that need it say so
             pass
     try:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from pathlib import Path
 
 from datagen.errors import InputError
@@ -77,17 +78,30 @@ def _cmd_generate(args) -> int:
           f"into the motion's first pose, {ph['settle_pose']} holding it and {ph['ramp']} ramping into the motion, then "
           f"the {ph['recorded']} that are recorded", flush=True)
     bars: dict = {}
+    tty = sys.stdout.isatty()
+    started: dict = {}
 
     def progress(kind, done, total, batch):
         key = "frames" if kind == 0 else "scenes"
+        desc = f"batch of {batch} scenes" if kind == 0 else "scenes"
+        unit = "frame" if kind == 0 else "scene"
+        if not tty:  # a log: one plain line (tqdm's figures: rate and time left) every 30 s and at the end
+            t0, last, seen = started.get(key, (None, 0.0, 0))
+            now = time.perf_counter()
+            if t0 is None or done < seen:  # a new batch counts from 0 again
+                t0, last = now, now
+            if done == total or now - last >= 30.0:
+                print(tqdm.format_meter(done, total, now - t0, prefix=desc, unit=unit), flush=True)
+                last = now
+            started[key] = (t0, last, done)
+            return
         bar = bars.get(key)
         # a new batch restarts the frame bar (Ray's tasks run side by side: the bar follows the furthest)
         if bar is None or bar.total != total or (kind == 0 and done < bar.n and args.executor == "local"):
             if bar is not None:
                 bar.close()
-            desc = f"batch of {batch} scenes" if kind == 0 else "scenes"
-            bar = bars[key] = tqdm(total=total, desc=desc, unit="frame" if kind == 0 else "scene", file=sys.stdout,
-                                   mininterval=1.0 if sys.stdout.isatty() else 30.0, dynamic_ncols=True)
+            bar = bars[key] = tqdm(total=total, desc=desc, unit=unit, file=sys.stdout, mininterval=1.0,
+                                   dynamic_ncols=True)
         if done > bar.n:
             bar.update(done - bar.n)
 

@@ -228,18 +228,6 @@ def from_store(store, sample: int, *, frames: np.ndarray | None = None, skeleton
 # ------------------------------------------------------------------------------------- npz
 
 
-def quiet_warp(level: int = 30) -> None:
-    """Keep warp's initialisation banner and per-module load lines off the console: only messages
-    of ``level`` or worse (logging's numbers: 30 warnings, 40 errors) pass. Recent warp versions
-    have ``config.log_level``, older ones ``config.quiet``."""
-    import warp as wp
-
-    if hasattr(wp.config, "log_level"):
-        wp.config.log_level = max(wp.config.log_level, level)
-    else:
-        wp.config.quiet = True
-
-
 def _scalar(d, key: str, default=None):
     if key not in d:
         return default

@@ -97,11 +97,11 @@ def _init_worker(config, out: str) -> None:
 
     # one BLAS thread per worker: the workers themselves are the parallelism
     os.environ.setdefault("OMP_NUM_THREADS", "1")
-    if logging.getLogger().level > logging.DEBUG:  # warp's banner and compile lines once, from the main process
+    if logging.getLogger().level > logging.DEBUG:  # warp's banner, compile lines and driver notice: once, from the main process
         with contextlib.suppress(ImportError):
-            import warp as wp
+            from datagen.sim.scene import quiet_warp
 
-            wp.config.log_level = max(getattr(wp.config, "log_level", 0), logging.ERROR)
+            quiet_warp(logging.ERROR, initialise=True)
     plan = Plan(config)
     _WORKER.update(plan=plan, writer=open_writer(plan, out))
 

@@ -282,6 +282,32 @@ _MEMORY_ADVICE = ("Simulate fewer scenes at once (the dataset config's simulatio
                   "(a larger garment_edge_length) or use a device with more memory.")
 
 
+def quiet_warp(level: int = 30, *, initialise: bool = False) -> None:
+    """Keep warp's initialisation banner and per-module load lines off the console: only messages
+    of ``level`` or worse (logging's numbers: 30 warnings, 40 errors) pass. Recent warp versions
+    have ``config.log_level``, older ones ``config.quiet``. With ``initialise``, warp is initialised
+    now with the process's stderr silenced: its native library prints a "could not load the NVIDIA
+    CUDA driver" notice on every machine without a GPU, which no setting turns off (a command asked
+    for ``--device cuda`` there says so itself)."""
+    import os
+
+    import warp as wp
+
+    if hasattr(wp.config, "log_level"):
+        wp.config.log_level = max(wp.config.log_level, level)
+    else:
+        wp.config.quiet = True
+    if initialise:
+        saved = os.dup(2)
+        try:
+            with open(os.devnull, "w") as null:
+                os.dup2(null.fileno(), 2)
+                wp.init()
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+
+
 def warp_device(device: str | None) -> str:
     """warp's name for ``device`` (``cpu``, ``cuda``, ``cuda:N``), or an :class:`InputError` that says
     what is wrong and what to do (a CUDA device on a machine without one, a name warp does not know)."""
