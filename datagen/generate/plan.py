@@ -4,6 +4,8 @@ and the store it writes (:func:`open_writer`). A pure function of the config."""
 
 from __future__ import annotations
 
+import logging
+import time
 from dataclasses import dataclass
 from functools import cached_property
 from pathlib import Path
@@ -11,6 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from datagen.generate.config import DatasetConfig, motion_file, parse_body, parse_garment, parse_motion
+
+log = logging.getLogger(__name__)
 
 SPLIT_CODES = {"train": 0, "val": 1, "test": 2}
 
@@ -146,7 +150,15 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
     motion_arrays = {"label": np.array([mo.label for mo in motions], np.int32),
                      "seed": np.array([parse_motion(s)[1] for s in plan.motions], np.int32),
                      "frame_count": np.array([mo.frame_count for mo in motions], np.int32)}
-    garments = [plan.garment(g) for g in range(len(plan.instances))]
+    garments = []
+    t0 = time.perf_counter()
+    for g in range(len(plan.instances)):  # built (or read from the garment cache) one by one: say so
+        t = time.perf_counter()
+        garments.append(plan.garment(g))
+        seconds = time.perf_counter() - t
+        if seconds > 1.0 or g + 1 == len(plan.instances):
+            log.info("garment %d/%d (%s on %s): %d vertices, %.1f s (%.0f s so far)", g + 1, len(plan.instances),
+                     *plan.instances[g], len(garments[-1].vertices), seconds, time.perf_counter() - t0)
     regions = sorted({r for g in garments for r in g.region_names})
     materials = list(MATERIALS)
     alpha, fa, plan.fit_diagnostics = _fit(plan, garments)
