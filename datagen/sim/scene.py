@@ -20,6 +20,7 @@ frame is flagged with the reason (and kept running, so the batch goes on).
 
 from __future__ import annotations
 
+import contextlib
 import logging
 import os
 import time
@@ -289,8 +290,6 @@ def quiet_warp(level: int = 30, *, initialise: bool = False) -> None:
     now with the process's stderr silenced: its native library prints a "could not load the NVIDIA
     CUDA driver" notice on every machine without a GPU, which no setting turns off (a command asked
     for ``--device cuda`` there says so itself)."""
-    import os
-
     import warp as wp
 
     if hasattr(wp.config, "log_level"):
@@ -298,14 +297,25 @@ def quiet_warp(level: int = 30, *, initialise: bool = False) -> None:
     else:
         wp.config.quiet = True
     if initialise:
-        saved = os.dup(2)
-        try:
-            with open(os.devnull, "w") as null:
-                os.dup2(null.fileno(), 2)
-                wp.init()
-        finally:
-            os.dup2(saved, 2)
-            os.close(saved)
+        with _native_stderr_silenced():
+            wp.init()
+
+
+@contextlib.contextmanager
+def _native_stderr_silenced():
+    """File descriptor 2 pointed at /dev/null for the block: what native libraries print there
+    (warp's CUDA-driver notices) is dropped; Python's own errors are raised as usual."""
+    import sys
+
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        with open(os.devnull, "w") as null:
+            os.dup2(null.fileno(), 2)
+            yield
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
 
 
 def warp_device(device: str | None) -> str:
@@ -314,7 +324,8 @@ def warp_device(device: str | None) -> str:
     import warp as wp
 
     try:
-        return str(wp.get_device(device))
+        with _native_stderr_silenced():  # warp's C code prints CUDA-driver errors of its own on the way
+            return str(wp.get_device(device))
     except (RuntimeError, ValueError) as exc:  # warp: unknown or absent device
         if str(device).startswith("cuda"):
             raise InputError(f"--device {device}: no CUDA device is usable here (warp: {exc}); use --device cpu, or run "
