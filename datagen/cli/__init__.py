@@ -65,6 +65,8 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=getattr(logging, args.log_level.upper()), format="%(message)s", stream=sys.stderr)
     for noisy in ("anny", "warp", "trimesh"):
         logging.getLogger(noisy).setLevel(max(logging.WARNING, logging.getLogger().level))
+    if args.log_level != "debug":  # matplotlib's one-time "building the font cache" notice: debug only
+        logging.getLogger("matplotlib.font_manager").setLevel(logging.ERROR)
     if args.log_level != "debug":  # warp's banner, kernel-compile lines and CPU-only driver notice: debug only
         try:
             from datagen.sim.scene import quiet_warp
