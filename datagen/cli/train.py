@@ -18,6 +18,16 @@ def _run_arguments(p, config_class: str) -> None:
     p.add_argument("--force", action="store_true", help="replace the run in --out")
 
 
+def _train_config(cls, args, **overrides):
+    """``cls`` from ``--config`` (or its defaults) with ``--epochs`` and the given command-line
+    overrides (None: not given), checked by the strict loader."""
+    from datagen.config import load_config
+
+    data = load_config(cls, args.config).as_dict() if args.config else cls().as_dict()
+    data |= {k: v for k, v in {**overrides, "epochs": args.epochs}.items() if v is not None}
+    return load_config(cls, data)
+
+
 def register(sub, formatter) -> None:
     p = sub.add_parser("train", formatter_class=formatter, help="train a model on a dataset store",
                        description="Train one of drape's models on a store's train split, choosing the checkpoint "
@@ -135,16 +145,10 @@ def register(sub, formatter) -> None:
 
 
 def _cmd_train_gnn(args) -> int:
-    from datagen.config import load_config
     from training.config import TrainConfig
     from training.gnn.run import train_gnn
 
-    data = load_config(TrainConfig, args.config).as_dict() if args.config else TrainConfig().as_dict()
-    if args.ablation is not None:
-        data["ablation"] = args.ablation
-    if args.epochs is not None:
-        data["epochs"] = args.epochs
-    config = load_config(TrainConfig, data)
+    config = _train_config(TrainConfig, args, ablation=args.ablation)
     result = train_gnn(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_frames']} frames; best "
           f"validation detail error {result['best']:.2f} mm ({result['best_checkpoint']})")
@@ -152,16 +156,10 @@ def _cmd_train_gnn(args) -> int:
 
 
 def _cmd_train_motion(args) -> int:
-    from datagen.config import load_config
     from training.motion.config import MotionConfig
     from training.motion.run import train_motion
 
-    data = load_config(MotionConfig, args.config).as_dict() if args.config else MotionConfig().as_dict()
-    if args.no_vertex_loss:
-        data["vertex_loss"] = False
-    if args.epochs is not None:
-        data["epochs"] = args.epochs
-    config = load_config(MotionConfig, data)
+    config = _train_config(MotionConfig, args, vertex_loss=False if args.no_vertex_loss else None)
     result = train_motion(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments; "
           f"best validation loss {result['best']:.4f} ({result['best_checkpoint']})")
@@ -169,18 +167,10 @@ def _cmd_train_motion(args) -> int:
 
 
 def _cmd_train_garment(args) -> int:
-    from datagen.config import load_config
     from training.garment.config import GarmentConfig
     from training.garment.run import train_garment
 
-    data = load_config(GarmentConfig, args.config).as_dict() if args.config else GarmentConfig().as_dict()
-    if args.garment is not None:
-        data["garment"] = args.garment
-    if args.zero_bos:
-        data["bos"] = "zero"
-    if args.epochs is not None:
-        data["epochs"] = args.epochs
-    config = load_config(GarmentConfig, data)
+    config = _train_config(GarmentConfig, args, garment=args.garment, bos="zero" if args.zero_bos else None)
     result = train_garment(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments of "
           f"the {config.garment} template ({result['template_vertices']} vertices); best validation loss "

@@ -236,3 +236,15 @@ def test_ddp_on_two_cpu_processes_follows_one_process(motion_store, tmp_path):
     print(f"\none process: {[round(x, 3) for x in a]}\ntwo processes: {[round(x, 3) for x in b]}")
     assert len(a) == len(b) == 3 and b[-1] < b[0]
     np.testing.assert_allclose(b, a, rtol=0.1)
+
+
+def test_chunked_point_queries_match_the_direct_ones(monkeypatch):
+    import training.metrics as tm
+
+    monkeypatch.setattr(tm, "ROWS", 7)  # several blocks per frame
+    g = torch.Generator().manual_seed(2)
+    a, b = torch.randn(3, 20, 3, generator=g), torch.randn(3, 33, 3, generator=g)
+    d = torch.cdist(a, b)
+    assert torch.equal(tm.nearest(a, b), d.argmin(dim=2))
+    direct = torch.maximum(d.min(dim=2).values.max(dim=1).values, d.min(dim=1).values.max(dim=1).values)
+    assert torch.allclose(tm.hausdorff(a, b), direct)

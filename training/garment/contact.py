@@ -18,8 +18,10 @@ def body_contact(garment: torch.Tensor, body: torch.Tensor, body_faces: torch.Te
     on posed bodies [T, B, 3]."""
     from datagen.geometry.features import vertex_normals
 
+    from training.metrics import nearest
+
     normals = vertex_normals(body, body_faces)
-    idx = torch.cdist(garment, body).argmin(dim=-1)  # [T, V]
+    idx = nearest(garment, body)  # [T, V], in blocks
     gather = idx[..., None].expand(-1, -1, 3)
     return torch.gather(body, 1, gather), torch.gather(normals, 1, gather)
 

@@ -39,7 +39,7 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     from training.loop import RUN_FILE, resolve_device
     from training.motion.model import frames_to_features
     from training.motion.module import BodyLayer
-    from training.motion.run import load_motion, sample_sequences
+    from training.motion.run import load_motion, sample_sequences, segment_labels
 
     if samples < 2 or steps < 1:
         raise InputError(f"--samples must be 2 or more and --steps 1 or more, got {samples} and {steps}")
@@ -50,7 +50,8 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
         if not (out / RUN_FILE).is_file():
             raise InputError(f"--force would delete {out}, which is not a drape run directory; choose another --out")
     module, meta, ckpt, store = load_garment(garment_run)
-    _, motion_meta, _, _ = load_motion(motion_run)
+    motion = load_motion(motion_run)  # once: every sampled sequence uses it
+    motion_meta = motion[1]
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
     module.to(dev).eval()
     template = store.garment(int(meta["template"]))
@@ -59,13 +60,13 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     faces = torch.as_tensor(np.asarray(store.body_model()["faces"], dtype=np.int64), device=dev)
     rng = np.random.default_rng(seed)
     labels = motion_meta["labels"]
-    trained = sorted({int(store.segment(int(s), names=["label"])["label"][0]) for s in store.split_segments("train")})
+    trained = sorted({int(x) for x in segment_labels(store, store.split_segments("train"))})
     choices = [labels[k] for k in trained if k >= 0] or labels
 
     def sample_set(n: int, base_seed: int):
         sets = []
         for k in range(n):
-            poses, trans, _ = sample_sequences(motion_run, str(rng.choice(choices)), 1, base_seed + k, device=device)
+            poses, trans, _ = sample_sequences(motion, str(rng.choice(choices)), 1, base_seed + k, device=device)
             p = torch.as_tensor(poses[0], dtype=torch.float32, device=dev)
             t = torch.as_tensor(trans[0], dtype=torch.float32, device=dev)
             rot = axis_angle_to_matrix(p)

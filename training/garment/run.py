@@ -34,21 +34,24 @@ def template_instance(store, garment: str) -> int:
     if garment not in names:
         raise InputError(f"unknown garment type {garment!r}; this store has: {', '.join(names)}")
     code = names.index(garment)
-    train = store.split_segments("train")
+    types = store.group("garments")["type"]
     counts: dict[int, int] = {}
-    for seg in train:
-        g = int(store.segment(int(seg), names=[])["garment"])
-        if int(store.garment(g)["type"]) == code:
-            counts[g] = counts.get(g, 0) + 1
+    for g in segment_garments(store, store.split_segments("train")):
+        if int(types[g]) == code:
+            counts[int(g)] = counts.get(int(g), 0) + 1
     if not counts:
         raise InputError(f"the train split of {store.path} has no segments of a {garment}")
     return max(counts, key=lambda g: (counts[g], -g))
 
 
+def segment_garments(store, segments: np.ndarray) -> np.ndarray:
+    """The garment instance of each segment, from the store's index (no frames read)."""
+    return store.index["garment"][store.index["segments"][np.asarray(segments, dtype=np.int64), 0]]
+
+
 def _segments(store, split: str, g: int, names=("pose", "trans", "label", "detail")) -> SegmentDataset:
     ds = SegmentDataset(store, split, names=names)
-    keep = [k for k, seg in enumerate(ds.segments) if int(store.segment(int(seg), names=[])["garment"]) == g]
-    ds.segments = ds.segments[keep]
+    ds.segments = ds.segments[segment_garments(store, ds.segments) == g]
     if not len(ds):
         raise InputError(f"the {split} split of {store.path} has no segments of garment instance {g} (the template); "
                          "the regressor learns one template, so every split must hold it (paper-motion keeps the "
@@ -175,7 +178,7 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
                      device: str = "auto") -> dict[str, Any]:
     """Tables 6/7/9's figures on ``split`` for the model and the skinned template; JSON-able."""
     from training.garment.module import template_edges
-    from training.motion.run import _hausdorff as hausdorff
+    from training.metrics import hausdorff
     from training.motion.sted import sted
 
     module, meta, ckpt, store = load_garment(run, data=data)

@@ -30,10 +30,16 @@ from training.motion.config import MotionConfig
 KIND = "motion"
 
 
+def segment_labels(store, segments: np.ndarray) -> np.ndarray:
+    """The label of each segment: its sample's motion's label (one label per motion), from the
+    store's index and motion table, without reading frames."""
+    sample = store.index["segments"][np.asarray(segments, dtype=np.int64), 0]
+    return store.motions()["label"][store.index["motion"][sample]]
+
+
 def _labelled(ds: SegmentDataset) -> SegmentDataset:
     """Keep the segments with a label (paper 001 trains on labelled motions; unlabelled mocap is -1)."""
-    keep = [k for k, seg in enumerate(ds.segments) if ds.store.segment(int(seg), names=["label"])["label"][0] >= 0]
-    ds.segments = ds.segments[keep]
+    ds.segments = ds.segments[segment_labels(ds.store, ds.segments) >= 0]
     return ds
 
 
@@ -102,12 +108,6 @@ def load_motion(run: str | Path, *, checkpoint: str = "best", data: str | Path |
     return module, meta, path, store
 
 
-def _hausdorff(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
-    """Symmetric Hausdorff distance between point sets a [N, V, 3] and b [N, W, 3], per row [N]."""
-    d = torch.cdist(a, b)
-    return torch.maximum(d.min(dim=2).values.max(dim=1).values, d.min(dim=1).values.max(dim=1).values)
-
-
 def _split_tensors(store, split: str, device) -> tuple[torch.Tensor, torch.Tensor]:
     """Frame features [N, T, 147] and labels [N] of a split's labelled segments."""
     from training.motion.module import pose_features
@@ -123,15 +123,15 @@ def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: s
                     generation: bool = True, repetitions: int = 20, recognizer_epochs: int = 100) -> dict[str, Any]:
     """Table 3 (reconstruction, beside the mean-pose baseline) and, with ``generation``, Table 4
     (:mod:`training.motion.recognition`) on ``split``; JSON-able."""
-    e = _reconstruction(run, data=data, split=split, device=device)
+    if generation and repetitions < 2:
+        raise InputError(f"--repetitions must be 2 or more (the spread needs two), got {repetitions}")
+    loaded = load_motion(run, data=data)  # once: the checkpoint and the store serve both tables
+    dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
+    e = _reconstruction(loaded, split, dev)
     if generation:
         from training.motion.recognition import generation_metrics, train_recognizer
 
-        if repetitions < 2:
-            raise InputError(f"--repetitions must be 2 or more (the spread needs two), got {repetitions}")
-        module, meta, _, store = load_motion(run, data=data)
-        dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
-        module.to(dev)
+        module, meta, _, store = loaded
         labels = len(meta["labels"])
         x_train, y_train = _split_tensors(store, "train", dev)
         x_test, y_test = _split_tensors(store, split, dev)
@@ -148,17 +148,15 @@ def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: s
 
 
 @torch.no_grad()
-def _reconstruction(run: str | Path, *, data: str | Path | None = None, split: str = "test",
-                    device: str = "auto") -> dict[str, Any]:
+def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
     """Reconstruction on ``split`` (see the module docstring) for the model and the baseline; JSON-able."""
     from datagen.geometry.rotations import axis_angle_to_matrix, matrix_to_axis_angle
+    from training.metrics import hausdorff
     from training.motion.model import features_to_frames
     from training.motion.module import BodyLayer, pose_features
     from training.motion.sted import mesh_edges, sted
 
-    module, meta, ckpt, store = load_motion(run, data=data)
-    accelerator = resolve_device(device)
-    dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
+    module, meta, ckpt, store = loaded
     module.to(dev)
     body_arrays = store.body_model()
     full = BodyLayer(body_arrays, 1).to(dev)  # STED needs the whole mesh
@@ -193,8 +191,8 @@ def _reconstruction(run: str | Path, *, data: str | Path | None = None, split: s
         sums["base_vertex_sq"] += float(((v_base - v_true) ** 2).sum())
         counts["vertex"] += v_true.numel()
         flat = (B * T, -1, 3)
-        sums["hausdorff"] += float(_hausdorff(v_pred.reshape(flat), v_true.reshape(flat)).sum())
-        sums["base_hausdorff"] += float(_hausdorff(v_base.reshape(flat), v_true.reshape(flat)).sum())
+        sums["hausdorff"] += float(hausdorff(v_pred.reshape(flat), v_true.reshape(flat)).sum())
+        sums["base_hausdorff"] += float(hausdorff(v_base.reshape(flat), v_true.reshape(flat)).sum())
         counts["frames"] += B * T
         t_full = posed(rot, x[..., -3:], body)
         sums["sted"] += float(sted(posed(prot, ptrans, body), t_full, edges)["sted"].sum())
@@ -261,8 +259,9 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
         raise InputError(f"--out {out} is a file; give a directory for the motions")
     if not out.parent.is_dir():
         raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
-    poses, trans, fps = sample_sequences(run, label, count, seed, device=device, frames=frames)
-    _, meta, ckpt, _ = load_motion(run)
+    loaded = load_motion(run)
+    poses, trans, fps = sample_sequences(loaded, label, count, seed, device=device, frames=frames)
+    _, meta, ckpt, _ = loaded
     code = meta["labels"].index(label)
     out.mkdir(exist_ok=True)
     paths = []
@@ -277,9 +276,10 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
 
 
 @torch.no_grad()
-def sample_sequences(run: str | Path, label: str, count: int, seed: int, *, device: str = "cpu",
+def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "cpu",
                      frames: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
-    """``count`` new motions of ``label``: poses [count, T, 24, 3] (axis-angle), translations
+    """``count`` new motions of ``label`` from a run directory (or what :func:`load_motion` returned
+    for it, to load the checkpoint once): poses [count, T, 24, 3] (axis-angle), translations
     [count, T, 3] starting at the origin, and the frame rate; reproducible from ``seed``. ``frames``
     (default: the segment length it was trained on) may ask for longer motions: the decoder's
     positions extend, but it has only learned the trained length."""
@@ -290,7 +290,7 @@ def sample_sequences(run: str | Path, label: str, count: int, seed: int, *, devi
         raise InputError(f"--count must be 1 or more, got {count}")
     if seed < 0:
         raise InputError(f"--seed must be 0 or more, got {seed}")
-    module, meta, _, _ = load_motion(run)
+    module, meta, _, _ = load_motion(run) if isinstance(run, (str, Path)) else run
     labels = meta["labels"]
     if label not in labels:
         raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
