@@ -96,6 +96,19 @@ def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, A
     return out
 
 
+def batch_samples(batch) -> int:
+    """How many samples a batch holds: graphs of a PyG batch, the leading size of a dict's (or a
+    tuple's) first tensor, else its length."""
+    graphs = getattr(batch, "num_graphs", None)
+    if graphs:
+        return int(graphs)
+    first = next(iter(batch.values()), None) if isinstance(batch, dict) else (
+        batch[0] if isinstance(batch, (list, tuple)) and batch else None)
+    if first is not None and hasattr(first, "shape") and len(first.shape):
+        return int(first.shape[0])
+    return len(batch)
+
+
 def _throughput_callback():
     """A Lightning callback measuring training samples per second (all processes together) per
     epoch, validation excluded; logged as ``train/samples_per_s``."""
@@ -111,7 +124,7 @@ def _throughput_callback():
             self._t0, self._samples = time.perf_counter(), 0
 
         def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx):
-            self._samples += int(getattr(batch, "num_graphs", 0) or len(batch)) * trainer.world_size
+            self._samples += batch_samples(batch) * trainer.world_size
 
         def on_train_epoch_end(self, trainer, pl_module):
             seconds = time.perf_counter() - self._t0

@@ -21,6 +21,12 @@ times (1 + k_d/h) for Rayleigh damping; H_bending the hinges' Gauss-Newton Hessi
 the full force of those energies and inertia. The preconditioner is the block diagonal (each
 vertex's 3x3). The matrix is applied element by element, never assembled.
 
+No float sum depends on the order in which threads run: each element writes its share of a product
+at its corners and every vertex gathers its own faces' and hinges' shares in its fixed incidence
+order (:func:`gather_product`); the per-scene dot products are summed in chunks of the scene's own
+vertices, then the chunks in order (:func:`chunk_dot`, :func:`scene_sum`). So a GPU run repeats
+bitwise, and a scene's result is the same in any batch and on any number of GPUs.
+
 Every scene of a batch has its own scalars (the products and step lengths of its own
 conjugate-gradient iteration), so a scene's result does not depend on what else is in its batch.
 """
@@ -123,41 +129,99 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
     diag_other[i] = hess
 
 
+@wp.func
+def _membrane_frame(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), D: wp.mat22, f: int):
+    """The deformation gradient's two columns of face ``f``."""
+    x0 = x[faces[f, 0]]
+    x1 = x[faces[f, 1]]
+    x2 = x[faces[f, 2]]
+    return (x1 - x0) * D[0, 0] + (x2 - x0) * D[1, 0], (x1 - x0) * D[0, 1] + (x2 - x0) * D[1, 1]
+
+
+@wp.func
+def _membrane_stress(f0: wp.vec3, f1: wp.vec3, k: wp.vec4) -> wp.mat22:
+    g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
+    g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
+    g01 = 0.5 * wp.dot(f0, f1)
+    return _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
+
+
+@wp.func
+def _hinge_gradient(x0: wp.vec3, x1: wp.vec3, x2: wp.vec3, x3: wp.vec3, slot: int) -> wp.vec3:
+    """dθ/dx of stencil vertex ``slot`` of a hinge (zero for a degenerate hinge)."""
+    E = x1 - x0
+    L = wp.length(E)
+    N1 = wp.cross(E, x2 - x0)
+    N2 = wp.cross(x3 - x0, E)
+    n1sq = wp.dot(N1, N1)
+    n2sq = wp.dot(N2, N2)
+    if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
+        return wp.vec3(0.0)
+    Eh = E / L
+    a = N1 / n1sq
+    b = N2 / n2sq
+    g = -b * L
+    if slot == 0:
+        g = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
+    elif slot == 1:
+        g = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
+    elif slot == 2:
+        g = -a * L
+    return g
+
+
+@wp.kernel
+def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
+                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                     edges: wp.array2d(dtype=wp.int32), bend_k: wp.array(dtype=float),
+                     damping: wp.array(dtype=float), h: float,
+                     v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
+                     v2e_offsets: wp.array(dtype=wp.int32), v2e: wp.array2d(dtype=wp.int32),
+                     out_diag: wp.array(dtype=wp.mat33)):
+    """Each vertex's 3x3 diagonal block of H_membrane + H_bending (orthotropic StVK Gauss-Newton
+    with the PSD-projected geometric part, and the hinges' k ∇θ∇θᵀ, both times 1 + k_d/h), summed
+    over its own faces and hinges in their fixed order."""
+    i = wp.tid()
+    blk_sum = wp.mat33(0.0)
+    for n in range(v2f_offsets[i], v2f_offsets[i + 1]):
+        f = v2f[n, 0]
+        D = dm_inv[f]
+        f0, f1 = _membrane_frame(x, faces, D, f)
+        k = tri_stiff[f]
+        S = _membrane_stress(f0, f1, k)
+        c = _corner_weights(D, v2f[n, 1])
+        a = f0 * c[0]
+        b = f1 * c[1]
+        s = f0 * c[1] + f1 * c[0]
+        blk = (wp.outer(a, a) * k[0] + wp.outer(b, b) * k[1] + (wp.outer(a, b) + wp.outer(b, a)) * k[2]
+               + wp.outer(s, s) * k[3])
+        geo = c[0] * (S[0, 0] * c[0] + S[0, 1] * c[1]) + c[1] * (S[1, 0] * c[0] + S[1, 1] * c[1])
+        blk = blk + wp.identity(n=3, dtype=float) * geo
+        blk_sum += blk * (tri_area[f] * (1.0 + damping[faces[f, 0]] / h))
+    for n in range(v2e_offsets[i], v2e_offsets[i + 1]):
+        e = v2e[n, 0]
+        if edges[e, 2] >= 0 and edges[e, 3] >= 0:
+            g = _hinge_gradient(x[edges[e, 0]], x[edges[e, 1]], x[edges[e, 2]], x[edges[e, 3]], v2e[n, 1])
+            blk_sum += wp.outer(g, g) * (bend_k[e] * (1.0 + damping[edges[e, 0]] / h))
+    out_diag[i] = blk_sum
+
+
 @wp.kernel
 def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
                      tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
                      damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3),
-                     diagonal: int, out: wp.array(dtype=wp.vec3), out_diag: wp.array(dtype=wp.mat33)):
-    """Add H_membrane p of every triangle to ``out`` (or, with ``diagonal``, its three 3x3 diagonal
-    blocks to ``out_diag``): orthotropic StVK Gauss-Newton with the PSD-projected geometric part,
-    times 1 + k_d/h."""
+                     out: wp.array2d(dtype=wp.vec3)):
+    """Each triangle's share of H_membrane p at its three corners, ``out[f, corner]`` (gathered per
+    vertex by :func:`gather_product`, so no sum depends on thread order)."""
     f = wp.tid()
     i0 = faces[f, 0]
     i1 = faces[f, 1]
     i2 = faces[f, 2]
-    x0 = x[i0]
     D = dm_inv[f]
-    f0 = (x[i1] - x0) * D[0, 0] + (x[i2] - x0) * D[1, 0]
-    f1 = (x[i1] - x0) * D[0, 1] + (x[i2] - x0) * D[1, 1]
+    f0, f1 = _membrane_frame(x, faces, D, f)
     k = tri_stiff[f]
-    g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
-    g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
-    g01 = 0.5 * wp.dot(f0, f1)
-    S = _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
+    S = _membrane_stress(f0, f1, k)
     A = tri_area[f] * (1.0 + damping[i0] / h)
-    if diagonal != 0:
-        for j in range(3):
-            c = _corner_weights(D, j)
-            idx = faces[f, j]
-            a = f0 * c[0]
-            b = f1 * c[1]
-            s = f0 * c[1] + f1 * c[0]
-            blk = (wp.outer(a, a) * k[0] + wp.outer(b, b) * k[1] + (wp.outer(a, b) + wp.outer(b, a)) * k[2]
-                   + wp.outer(s, s) * k[3])
-            geo = c[0] * (S[0, 0] * c[0] + S[0, 1] * c[1]) + c[1] * (S[1, 0] * c[0] + S[1, 1] * c[1])
-            blk = blk + wp.identity(n=3, dtype=float) * geo
-            wp.atomic_add(out_diag, idx, blk * A)
-        return
     c0 = _corner_weights(D, 0)
     c1 = _corner_weights(D, 1)
     c2 = _corner_weights(D, 2)
@@ -177,18 +241,19 @@ def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
     g1 = df0 * S[0, 1] + df1 * S[1, 1]
     for j in range(3):
         c = _corner_weights(D, j)
-        idx = faces[f, j]
-        val = f0 * (c[0] * ta + c[1] * ts) + f1 * (c[1] * tb + c[0] * ts) + g0 * c[0] + g1 * c[1]
-        wp.atomic_add(out, idx, val * A)
+        out[f, j] = (f0 * (c[0] * ta + c[1] * ts) + f1 * (c[1] * tb + c[0] * ts) + g0 * c[0] + g1 * c[1]) * A
 
 
 @wp.kernel
 def bending_product(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), bend_k: wp.array(dtype=float),
-                    damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3), diagonal: int,
-                    out: wp.array(dtype=wp.vec3), out_diag: wp.array(dtype=wp.mat33)):
-    """Add the hinges' Gauss-Newton Hessian k (1 + k_d/h) ∇θ∇θᵀ times p (or its diagonal blocks)."""
+                    damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3),
+                    out: wp.array2d(dtype=wp.vec3)):
+    """Each hinge's share of its Gauss-Newton Hessian k (1 + k_d/h) ∇θ∇θᵀ times p at its four
+    stencil vertices, ``out[e, slot]`` (zero for a boundary edge or a degenerate hinge)."""
     e = wp.tid()
     if edges[e, 2] < 0 or edges[e, 3] < 0:
+        for j in range(4):
+            out[e, j] = wp.vec3(0.0)
         return
     i0 = edges[e, 0]
     i1 = edges[e, 1]
@@ -198,41 +263,32 @@ def bending_product(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32
     x1 = x[i1]
     x2 = x[i2]
     x3 = x[i3]
-    E = x1 - x0
-    L = wp.length(E)
-    N1 = wp.cross(E, x2 - x0)
-    N2 = wp.cross(x3 - x0, E)
-    n1sq = wp.dot(N1, N1)
-    n2sq = wp.dot(N2, N2)
-    if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
-        return
-    Eh = E / L
-    a = N1 / n1sq
-    b = N2 / n2sq
-    g0 = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
-    g1 = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
-    g2 = -a * L
-    g3 = -b * L
-    k = bend_k[e] * (1.0 + damping[i0] / h)
-    if diagonal != 0:
-        wp.atomic_add(out_diag, i0, wp.outer(g0, g0) * k)
-        wp.atomic_add(out_diag, i1, wp.outer(g1, g1) * k)
-        wp.atomic_add(out_diag, i2, wp.outer(g2, g2) * k)
-        wp.atomic_add(out_diag, i3, wp.outer(g3, g3) * k)
-        return
-    s = k * (wp.dot(g0, p[i0]) + wp.dot(g1, p[i1]) + wp.dot(g2, p[i2]) + wp.dot(g3, p[i3]))
-    wp.atomic_add(out, i0, g0 * s)
-    wp.atomic_add(out, i1, g1 * s)
-    wp.atomic_add(out, i2, g2 * s)
-    wp.atomic_add(out, i3, g3 * s)
+    g0 = _hinge_gradient(x0, x1, x2, x3, 0)
+    g1 = _hinge_gradient(x0, x1, x2, x3, 1)
+    g2 = _hinge_gradient(x0, x1, x2, x3, 2)
+    g3 = _hinge_gradient(x0, x1, x2, x3, 3)
+    s = bend_k[e] * (1.0 + damping[i0] / h) * (wp.dot(g0, p[i0]) + wp.dot(g1, p[i1]) + wp.dot(g2, p[i2])
+                                               + wp.dot(g3, p[i3]))
+    out[e, 0] = g0 * s
+    out[e, 1] = g1 * s
+    out[e, 2] = g2 * s
+    out[e, 3] = g3 * s
 
 
 @wp.kernel
-def diagonal_product(diag: wp.array(dtype=wp.mat33), p: wp.array(dtype=wp.vec3), active: wp.array(dtype=wp.int32),
-                     out: wp.array(dtype=wp.vec3)):
-    """out = D p per vertex (the start of a product: the element kernels add to it)."""
+def gather_product(diag: wp.array(dtype=wp.mat33), p: wp.array(dtype=wp.vec3),
+                   v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
+                   v2e_offsets: wp.array(dtype=wp.int32), v2e: wp.array2d(dtype=wp.int32),
+                   face_part: wp.array2d(dtype=wp.vec3), edge_part: wp.array2d(dtype=wp.vec3),
+                   out: wp.array(dtype=wp.vec3)):
+    """out = D p + Σ the vertex's faces' and hinges' shares, in the vertex's fixed incidence order."""
     i = wp.tid()
-    out[i] = diag[i] * p[i]
+    acc = diag[i] * p[i]
+    for n in range(v2f_offsets[i], v2f_offsets[i + 1]):
+        acc += face_part[v2f[n, 0], v2f[n, 1]]
+    for n in range(v2e_offsets[i], v2e_offsets[i + 1]):
+        acc += edge_part[v2e[n, 0], v2e[n, 1]]
+    out[i] = acc
 
 
 @wp.kernel
@@ -249,9 +305,9 @@ def invert_blocks(diag_other: wp.array(dtype=wp.mat33), diag_elements: wp.array(
 
 @wp.kernel
 def cg_start(force: wp.array(dtype=wp.vec3), inverse: wp.array(dtype=wp.mat33), active: wp.array(dtype=wp.int32),
-             scene: wp.array(dtype=wp.int32), r: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3),
-             p: wp.array(dtype=wp.vec3), d: wp.array(dtype=wp.vec3), rz: wp.array(dtype=wp.float64)):
-    """d = 0, r = f, z = P⁻¹ r, p = z; per scene rz = Σ r·z."""
+             r: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3), p: wp.array(dtype=wp.vec3),
+             d: wp.array(dtype=wp.vec3)):
+    """d = 0, r = f, z = P⁻¹ r, p = z."""
     i = wp.tid()
     ri = force[i]
     if active[i] == 0:
@@ -261,22 +317,36 @@ def cg_start(force: wp.array(dtype=wp.vec3), inverse: wp.array(dtype=wp.mat33), 
     z[i] = zi
     p[i] = zi
     d[i] = wp.vec3(0.0)
-    wp.atomic_add(rz, scene[i], wp.float64(wp.dot(ri, zi)))
 
 
 @wp.kernel
-def scene_dot(a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
+def chunk_dot(a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), chunks: wp.array2d(dtype=wp.int32),
               out: wp.array(dtype=wp.float64)):
-    i = wp.tid()
-    wp.atomic_add(out, scene[i], wp.float64(wp.dot(a[i], b[i])))
+    """Σ a·b over each chunk of one scene's vertices, in vertex order (float64)."""
+    c = wp.tid()
+    acc = wp.float64(0.0)
+    for i in range(chunks[c, 0], chunks[c, 1]):
+        acc += wp.float64(wp.dot(a[i], b[i]))
+    out[c] = acc
+
+
+@wp.kernel
+def scene_sum(chunk_sum: wp.array(dtype=wp.float64), scene_chunks: wp.array2d(dtype=wp.int32),
+              out: wp.array(dtype=wp.float64)):
+    """Each scene's sum of its chunks, in chunk order: the reduction's order is fixed by the scene's
+    own vertices, so it is the same in every run and in every batch."""
+    s = wp.tid()
+    acc = wp.float64(0.0)
+    for c in range(scene_chunks[s, 0], scene_chunks[s, 1]):
+        acc += chunk_sum[c]
+    out[s] = acc
 
 
 @wp.kernel
 def cg_step(p: wp.array(dtype=wp.vec3), q: wp.array(dtype=wp.vec3), inverse: wp.array(dtype=wp.mat33),
             scene: wp.array(dtype=wp.int32), rz: wp.array(dtype=wp.float64), pq: wp.array(dtype=wp.float64),
-            d: wp.array(dtype=wp.vec3), r: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3),
-            rz_new: wp.array(dtype=wp.float64)):
-    """α = rz/pq of the vertex's scene; d += α p; r -= α q; z = P⁻¹ r; per scene rz_new = Σ r·z."""
+            d: wp.array(dtype=wp.vec3), r: wp.array(dtype=wp.vec3), z: wp.array(dtype=wp.vec3)):
+    """α = rz/pq of the vertex's scene; d += α p; r -= α q; z = P⁻¹ r."""
     i = wp.tid()
     s = scene[i]
     alpha = float(0.0)
@@ -284,10 +354,8 @@ def cg_step(p: wp.array(dtype=wp.vec3), q: wp.array(dtype=wp.vec3), inverse: wp.
         alpha = float(rz[s] / pq[s])
     d[i] = d[i] + p[i] * alpha
     ri = r[i] - q[i] * alpha
-    zi = inverse[i] * ri
     r[i] = ri
-    z[i] = zi
-    wp.atomic_add(rz_new, s, wp.float64(wp.dot(ri, zi)))
+    z[i] = inverse[i] * ri
 
 
 @wp.kernel

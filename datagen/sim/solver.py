@@ -115,6 +115,23 @@ class SolverConfig:
                              f"({1.5 * self.self_radius:g}), the distance within which cloth pairs are contacts")
 
 
+GLOBAL_REDUCTION_CHUNK = 128
+"""Vertices per partial sum of the global step's per-scene dot products."""
+
+
+def _reduction_chunks(particle_range: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
+    """Chunks [first, end) of at most ``size`` vertices inside each scene's range, [C, 2], and each
+    scene's chunks [first, end), [S, 2]: a scene's sums are cut where its own vertices say, whatever
+    its place in the batch."""
+    chunks, scene_chunks = [], []
+    for p0, p1 in np.asarray(particle_range, dtype=np.int64):
+        first = len(chunks)
+        chunks += [(a, min(a + size, int(p1))) for a in range(int(p0), int(p1), size)]
+        scene_chunks.append((first, len(chunks)))
+    return (np.asarray(chunks, dtype=np.int32).reshape(-1, 2),
+            np.asarray(scene_chunks, dtype=np.int32).reshape(-1, 2))
+
+
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
@@ -140,6 +157,14 @@ class SolverVBD:
                 self.cg_force, self.cg_r, self.cg_z, self.cg_p, self.cg_q, self.cg_d = (z3(n) for _ in range(6))
                 self.cg_diag_other, self.cg_diag_el, self.cg_inverse = (wp.zeros(n, dtype=wp.mat33) for _ in range(3))
                 self.cg_rz, self.cg_rz_new, self.cg_pq = (wp.zeros(m.scene_count, dtype=wp.float64) for _ in range(3))
+                # each element's share of a product at its corners, gathered per vertex
+                self.cg_face_part = wp.zeros((nf, 3), dtype=wp.vec3)
+                self.cg_edge_part = wp.zeros((ne, 4), dtype=wp.vec3)
+                # per-scene dot products: chunks of each scene's own vertices, summed in order
+                chunks, scene_chunks = _reduction_chunks(m.host.particle_range, GLOBAL_REDUCTION_CHUNK)
+                self.cg_chunks = wp.array(chunks, dtype=wp.int32)
+                self.cg_scene_chunks = wp.array(scene_chunks, dtype=wp.int32)
+                self.cg_chunk_sum = wp.zeros(max(len(chunks), 1), dtype=wp.float64)
             P = m.body_part_count
             self.body_lambda = wp.zeros((n, P), dtype=float)
             # copies of what a step carries over from the last besides the state, for a redo
@@ -333,27 +358,28 @@ class SolverVBD:
             m.tri_lock, m.edges, m.rest_angle, m.bend_k, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
             self.body_has, self.body_point, self.body_normal, self.body_radius, c.body_stiffness, eps_u, h,
             self.cg_force, self.cg_diag_other])
-        self.cg_diag_el.zero_()
-        p, q = self.cg_p, self.cg_q
-        wp.launch(N.membrane_product, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h, p, 1,
-                                                  q, self.cg_diag_el])
-        wp.launch(N.bending_product, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, p, 1, q, self.cg_diag_el])
+        wp.launch(N.element_diagonal, n, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.bend_k,
+                                                 m.damping, h, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
+                                                 self.cg_diag_el])
         wp.launch(N.invert_blocks, n, inputs=[self.cg_diag_other, self.cg_diag_el, m.active, self.cg_inverse])
+        p, q, r, z = self.cg_p, self.cg_q, self.cg_r, self.cg_z
+        chunks, scene_chunks, partial = self.cg_chunks, self.cg_scene_chunks, self.cg_chunk_sum
         rz, rz_new = self.cg_rz, self.cg_rz_new
-        rz.zero_()
-        wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, m.particle_scene, self.cg_r,
-                                         self.cg_z, p, self.cg_d, rz])
+        wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
+        wp.launch(N.chunk_dot, chunks.shape[0], inputs=[r, z, chunks, partial])
+        wp.launch(N.scene_sum, m.scene_count, inputs=[partial, scene_chunks, rz])
         for _ in range(c.global_iterations):
-            wp.launch(N.diagonal_product, n, inputs=[self.cg_diag_other, p, m.active, q])
             wp.launch(N.membrane_product, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
-                                                      p, 0, q, self.cg_diag_el])
-            wp.launch(N.bending_product, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, p, 0, q, self.cg_diag_el])
-            self.cg_pq.zero_()
-            wp.launch(N.scene_dot, n, inputs=[p, q, m.particle_scene, self.cg_pq])
-            rz_new.zero_()
-            wp.launch(N.cg_step, n, inputs=[p, q, self.cg_inverse, m.particle_scene, rz, self.cg_pq, self.cg_d,
-                                            self.cg_r, self.cg_z, rz_new])
-            wp.launch(N.cg_direction, n, inputs=[self.cg_z, m.particle_scene, rz, rz_new, p])
+                                                      p, self.cg_face_part])
+            wp.launch(N.bending_product, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, p, self.cg_edge_part])
+            wp.launch(N.gather_product, n, inputs=[self.cg_diag_other, p, m.v2f_offsets, m.v2f, m.v2e_offsets,
+                                                   m.v2e, self.cg_face_part, self.cg_edge_part, q])
+            wp.launch(N.chunk_dot, chunks.shape[0], inputs=[p, q, chunks, partial])
+            wp.launch(N.scene_sum, m.scene_count, inputs=[partial, scene_chunks, self.cg_pq])
+            wp.launch(N.cg_step, n, inputs=[p, q, self.cg_inverse, m.particle_scene, rz, self.cg_pq, self.cg_d, r, z])
+            wp.launch(N.chunk_dot, chunks.shape[0], inputs=[r, z, chunks, partial])
+            wp.launch(N.scene_sum, m.scene_count, inputs=[partial, scene_chunks, rz_new])
+            wp.launch(N.cg_direction, n, inputs=[z, m.particle_scene, rz, rz_new, p])
             rz, rz_new = rz_new, rz
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
 
