@@ -605,6 +605,25 @@ def lock_force_hessian(f0: wp.vec3, f1: wp.vec3, c: wp.vec2, lam_lock: float, kA
 
 
 @wp.func
+def hinge_gradients(x0: wp.vec3, x1: wp.vec3, x2: wp.vec3, x3: wp.vec3):
+    """dθ/dx of a hinge's four stencil vertices (0, 1: the hinge; 2, 3: the opposite corners;
+    Bridson et al. 2003, signs for drape's θ); zeros for a degenerate hinge."""
+    E = x1 - x0
+    L = wp.length(E)
+    N1 = wp.cross(E, x2 - x0)
+    N2 = wp.cross(x3 - x0, E)
+    n1sq = wp.dot(N1, N1)
+    n2sq = wp.dot(N2, N2)
+    if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
+        return wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0)
+    Eh = E / L
+    a = N1 / n1sq
+    b = N2 / n2sq
+    return (-(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh)), a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh),
+            -a * L, -b * L)
+
+
+@wp.func
 def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                           edges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float),
                           bend_k: wp.array(dtype=float), damping: float, h: float):
@@ -627,28 +646,22 @@ def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3)
     n1 = N1 / wp.sqrt(n1sq)
     n2 = N2 / wp.sqrt(n2sq)
     theta = wp.atan2(wp.dot(wp.cross(n1, n2), Eh), wp.dot(n1, n2))
-    a = N1 / n1sq
-    b = N2 / n2sq
-    # dθ/dx of the stencil vertex (Bridson et al. 2003, signs for this θ)
-    g = wp.vec3(0.0)
+    g0, g1, g2, g3 = hinge_gradients(x0, x1, x2, x3)
+    g = g3
     if local == 0:
-        g = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
+        g = g0
     elif local == 1:
-        g = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
+        g = g1
     elif local == 2:
-        g = -a * L
-    else:
-        g = -b * L
+        g = g2
     k = bend_k[e]
     dtheta = theta - rest_angle[e]
     force = -g * (k * dtheta)
     hess = wp.outer(g, g) * k
     if damping > 0.0:
         # Rayleigh damping on the rate of the angle (all four stencil vertices)
-        g0 = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
-        g1 = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
         rate = (wp.dot(g0, x0 - x_prev[edges[e, 0]]) + wp.dot(g1, x1 - x_prev[edges[e, 1]])
-                - wp.dot(a * L, x2 - x_prev[edges[e, 2]]) - wp.dot(b * L, x3 - x_prev[edges[e, 3]]))
+                + wp.dot(g2, x2 - x_prev[edges[e, 2]]) + wp.dot(g3, x3 - x_prev[edges[e, 3]]))
         force = force - g * (k * rate * damping / h)
         hess = hess * (1.0 + damping / h)
     return force, hess

@@ -35,7 +35,8 @@ from __future__ import annotations
 
 import warp as wp
 
-from datagen.sim.kernels import bending_force_hessian, contact_force_hessian, lock_force_hessian, membrane_force_hessian
+from datagen.sim.kernels import (bending_force_hessian, contact_force_hessian, hinge_gradients, lock_force_hessian,
+                                 membrane_force_hessian)
 
 
 @wp.func
@@ -146,30 +147,6 @@ def _membrane_stress(f0: wp.vec3, f1: wp.vec3, k: wp.vec4) -> wp.mat22:
     return _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
 
 
-@wp.func
-def _hinge_gradient(x0: wp.vec3, x1: wp.vec3, x2: wp.vec3, x3: wp.vec3, slot: int) -> wp.vec3:
-    """dθ/dx of stencil vertex ``slot`` of a hinge (zero for a degenerate hinge)."""
-    E = x1 - x0
-    L = wp.length(E)
-    N1 = wp.cross(E, x2 - x0)
-    N2 = wp.cross(x3 - x0, E)
-    n1sq = wp.dot(N1, N1)
-    n2sq = wp.dot(N2, N2)
-    if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
-        return wp.vec3(0.0)
-    Eh = E / L
-    a = N1 / n1sq
-    b = N2 / n2sq
-    g = -b * L
-    if slot == 0:
-        g = -(a * wp.dot(x2 - x1, Eh) + b * wp.dot(x3 - x1, Eh))
-    elif slot == 1:
-        g = a * wp.dot(x2 - x0, Eh) + b * wp.dot(x3 - x0, Eh)
-    elif slot == 2:
-        g = -a * L
-    return g
-
-
 @wp.kernel
 def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
                      tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
@@ -201,7 +178,15 @@ def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
     for n in range(v2e_offsets[i], v2e_offsets[i + 1]):
         e = v2e[n, 0]
         if edges[e, 2] >= 0 and edges[e, 3] >= 0:
-            g = _hinge_gradient(x[edges[e, 0]], x[edges[e, 1]], x[edges[e, 2]], x[edges[e, 3]], v2e[n, 1])
+            g0, g1, g2, g3 = hinge_gradients(x[edges[e, 0]], x[edges[e, 1]], x[edges[e, 2]], x[edges[e, 3]])
+            slot = v2e[n, 1]
+            g = g3
+            if slot == 0:
+                g = g0
+            elif slot == 1:
+                g = g1
+            elif slot == 2:
+                g = g2
             blk_sum += wp.outer(g, g) * (bend_k[e] * (1.0 + damping[edges[e, 0]] / h))
     out_diag[i] = blk_sum
 
@@ -263,10 +248,7 @@ def bending_product(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32
     x1 = x[i1]
     x2 = x[i2]
     x3 = x[i3]
-    g0 = _hinge_gradient(x0, x1, x2, x3, 0)
-    g1 = _hinge_gradient(x0, x1, x2, x3, 1)
-    g2 = _hinge_gradient(x0, x1, x2, x3, 2)
-    g3 = _hinge_gradient(x0, x1, x2, x3, 3)
+    g0, g1, g2, g3 = hinge_gradients(x0, x1, x2, x3)
     s = bend_k[e] * (1.0 + damping[i0] / h) * (wp.dot(g0, p[i0]) + wp.dot(g1, p[i1]) + wp.dot(g2, p[i2])
                                                + wp.dot(g3, p[i3]))
     out[e, 0] = g0 * s
