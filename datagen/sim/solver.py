@@ -356,8 +356,9 @@ class SolverVBD:
         wp.launch(N.vertex_force_diagonal, n, inputs=[
             x, self.x_prev, self.y, m.mass, m.active, m.damping, m.faces, m.dm_inv, m.tri_area, m.tri_stiff,
             m.tri_lock, m.edges, m.rest_angle, m.bend_k, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-            self.body_has, self.body_point, self.body_normal, self.body_radius, c.body_stiffness, eps_u, h,
-            self.cg_force, self.cg_diag_other])
+            self.body_has, self.body_point, self.body_normal, self.body_radius, self.body_disp, self.body_lambda,
+            m.friction, m.vertex_area, self.friction_used, int(c.body_friction), c.friction_pressure,
+            c.body_stiffness, eps_u, h, self.cg_force, self.cg_diag_other])
         wp.launch(N.element_diagonal, n, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.bend_k,
                                                  m.damping, h, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
                                                  self.cg_diag_el])
