@@ -624,6 +624,19 @@ def hinge_gradients(x0: wp.vec3, x1: wp.vec3, x2: wp.vec3, x3: wp.vec3):
 
 
 @wp.func
+def stencil_pick(g0: wp.vec3, g1: wp.vec3, g2: wp.vec3, g3: wp.vec3, slot: int) -> wp.vec3:
+    """The one of a hinge's four stencil vectors that belongs to ``slot``."""
+    g = g3
+    if slot == 0:
+        g = g0
+    elif slot == 1:
+        g = g1
+    elif slot == 2:
+        g = g2
+    return g
+
+
+@wp.func
 def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                           edges: wp.array2d(dtype=wp.int32), rest_angle: wp.array(dtype=float),
                           bend_k: wp.array(dtype=float), damping: float, h: float):
@@ -647,13 +660,7 @@ def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3)
     n2 = N2 / wp.sqrt(n2sq)
     theta = wp.atan2(wp.dot(wp.cross(n1, n2), Eh), wp.dot(n1, n2))
     g0, g1, g2, g3 = hinge_gradients(x0, x1, x2, x3)
-    g = g3
-    if local == 0:
-        g = g0
-    elif local == 1:
-        g = g1
-    elif local == 2:
-        g = g2
+    g = stencil_pick(g0, g1, g2, g3, local)
     k = bend_k[e]
     dtheta = theta - rest_angle[e]
     force = -g * (k * dtheta)

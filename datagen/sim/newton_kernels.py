@@ -36,7 +36,7 @@ from __future__ import annotations
 import warp as wp
 
 from datagen.sim.kernels import (bending_force_hessian, contact_force_hessian, friction_force_hessian, friction_part,
-                                 hinge_gradients, lock_force_hessian, membrane_force_hessian)
+                                 hinge_gradients, lock_force_hessian, membrane_force_hessian, stencil_pick)
 
 
 @wp.func
@@ -200,14 +200,7 @@ def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
         e = v2e[n, 0]
         if edges[e, 2] >= 0 and edges[e, 3] >= 0:
             g0, g1, g2, g3 = hinge_gradients(x[edges[e, 0]], x[edges[e, 1]], x[edges[e, 2]], x[edges[e, 3]])
-            slot = v2e[n, 1]
-            g = g3
-            if slot == 0:
-                g = g0
-            elif slot == 1:
-                g = g1
-            elif slot == 2:
-                g = g2
+            g = stencil_pick(g0, g1, g2, g3, v2e[n, 1])
             blk_sum += wp.outer(g, g) * (bend_k[e] * (1.0 + damping[edges[e, 0]] / h))
     out_diag[i] = blk_sum
 
