@@ -605,15 +605,20 @@ def lock_force_hessian(f0: wp.vec3, f1: wp.vec3, c: wp.vec2, lam_lock: float, kA
 
 
 @wp.func
+def hinge_frame(x0: wp.vec3, x1: wp.vec3, x2: wp.vec3, x3: wp.vec3):
+    """A hinge's edge E = x1 - x0, its length, the two triangles' (unnormalised) normals N1, N2 and
+    their squared lengths."""
+    E = x1 - x0
+    N1 = wp.cross(E, x2 - x0)
+    N2 = wp.cross(x3 - x0, E)
+    return E, wp.length(E), N1, N2, wp.dot(N1, N1), wp.dot(N2, N2)
+
+
+@wp.func
 def hinge_gradients(x0: wp.vec3, x1: wp.vec3, x2: wp.vec3, x3: wp.vec3):
     """dθ/dx of a hinge's four stencil vertices (0, 1: the hinge; 2, 3: the opposite corners;
     Bridson et al. 2003, signs for drape's θ); zeros for a degenerate hinge."""
-    E = x1 - x0
-    L = wp.length(E)
-    N1 = wp.cross(E, x2 - x0)
-    N2 = wp.cross(x3 - x0, E)
-    n1sq = wp.dot(N1, N1)
-    n2sq = wp.dot(N2, N2)
+    E, L, N1, N2, n1sq, n2sq = hinge_frame(x0, x1, x2, x3)
     if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
         return wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0), wp.vec3(0.0)
     Eh = E / L
@@ -646,12 +651,7 @@ def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3)
     x1 = x[edges[e, 1]]
     x2 = x[edges[e, 2]]
     x3 = x[edges[e, 3]]
-    E = x1 - x0
-    L = wp.length(E)
-    N1 = wp.cross(E, x2 - x0)
-    N2 = wp.cross(x3 - x0, E)
-    n1sq = wp.dot(N1, N1)
-    n2sq = wp.dot(N2, N2)
+    E, L, N1, N2, n1sq, n2sq = hinge_frame(x0, x1, x2, x3)
     zero = wp.mat33(0.0)
     if L < 1.0e-12 or n1sq < 1.0e-24 or n2sq < 1.0e-24:
         return wp.vec3(0.0), zero
@@ -693,6 +693,15 @@ def friction_part(i: int, has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dt
         if p != best and has[i, p] == 1 and lam[i, p] > 0.0 and wp.dot(normal[i, p], n) < 0.0:
             return -1
     return best
+
+
+@wp.func
+def friction_limit(i: int, part: int, lam: wp.array2d(dtype=float), friction: wp.array(dtype=float),
+                   area: wp.array(dtype=float), max_pressure: float, used: wp.array(dtype=float)) -> float:
+    """The body friction force vertex i has left within a substep [N]: μ times part ``part``'s lagged
+    normal force, capped at ``max_pressure`` x the vertex's area, less what the inertial prediction
+    used (the sweeps' and the global step's limit)."""
+    return friction[i] * wp.min(lam[i, part], max_pressure * area[i]) - used[i]
 
 
 @wp.func
@@ -910,7 +919,7 @@ def solve_colour(
     if body_friction != 0:
         best = friction_part(i, body_has, body_normal, body_lambda)
         if best >= 0:
-            limit = friction[i] * wp.min(body_lambda[i, best], friction_pressure * vertex_area[i]) - friction_used[i]
+            limit = friction_limit(i, best, body_lambda, friction, vertex_area, friction_pressure, friction_used)
             new = body_stick_slip(new, x_prev[i], hel, body_normal[i, best], body_disp[i, best], limit)
     move = new - x_det[i]
     L = wp.length(move)

@@ -35,8 +35,8 @@ from __future__ import annotations
 
 import warp as wp
 
-from datagen.sim.kernels import (bending_force_hessian, contact_force_hessian, friction_force_hessian, friction_part,
-                                 hinge_gradients, lock_force_hessian, membrane_force_hessian, stencil_pick)
+from datagen.sim.kernels import (bending_force_hessian, contact_force_hessian, friction_force_hessian, friction_limit,
+                                 friction_part, hinge_gradients, lock_force_hessian, membrane_force_hessian, stencil_pick)
 
 
 @wp.func
@@ -141,7 +141,7 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
     if body_friction != 0:
         best = friction_part(i, body_has, body_normal, body_lambda)
         if best >= 0:
-            limit = friction[i] * wp.min(body_lambda[i, best], friction_pressure * vertex_area[i]) - friction_used[i]
+            limit = friction_limit(i, best, body_lambda, friction, vertex_area, friction_pressure, friction_used)
             if limit > 0.0:
                 ff, hf = friction_force_hessian((xi - x_prev[i]) - body_disp[i, best], body_normal[i, best], limit,
                                                 eps_u)
