@@ -395,7 +395,10 @@ class StoreWriter:
                 raise InputError(f"{path} is a non-empty directory that is not a drape store (no {ROOT_METADATA} "
                                  f"with format '{STORE_FORMAT}'); give a new or empty directory for the store. "
                                  "Nothing was changed.")
-            cls._create(path, identity)
+            if not cls._create(path, identity):  # another process created it meanwhile: open that one
+                return cls.open(path, config=config, seed=seed, sample_count=sample_count,
+                                segment_length=segment_length, failure_names=failure_names,
+                                code_version=code_version, durable=durable)
         return cls(path, identity, durable=durable)
 
     @staticmethod
@@ -419,19 +422,28 @@ class StoreWriter:
                              "settings.")
 
     @staticmethod
-    def _create(path: Path, identity: dict) -> None:
-        created = not path.exists()
+    def _create(path: Path, identity: dict) -> bool:
+        """Make the store at ``path`` (absent or an empty directory) in one rename: it is built in a
+        sibling directory and renamed into place, so nobody sees ``path`` half made. False when
+        another process put a store there first (two Ray tasks opening one new store at once)."""
         attrs = {"format": STORE_FORMAT, **identity, "drape_version": __version__, "complete": False}
+        tmp = path.parent / f".{path.name}.creating-{os.getpid()}-{os.urandom(4).hex()}"
         try:
             with storage_errors(path, "create the store", "Nothing was written."):
-                path.mkdir(parents=True, exist_ok=True)
-                write_json_atomic(path / ROOT_METADATA, {"zarr_format": 3, "node_type": "group", "attributes": attrs})
-                (path / STAGING).mkdir(exist_ok=True)
-        except BaseException:
-            if created:
-                shutil.rmtree(path, ignore_errors=True)
-            raise
+                path.parent.mkdir(parents=True, exist_ok=True)
+                tmp.mkdir()
+                write_json_atomic(tmp / ROOT_METADATA, {"zarr_format": 3, "node_type": "group", "attributes": attrs})
+                (tmp / STAGING).mkdir()
+                try:
+                    os.rename(tmp, path)  # replaces an empty directory, fails on a non-empty one
+                except OSError as exc:
+                    if exc.errno not in (errno.ENOTEMPTY, errno.EEXIST):
+                        raise
+                    return False
+        finally:
+            shutil.rmtree(tmp, ignore_errors=True)  # gone already after the rename
         logger.info("created store %s for %d samples", path, identity["sample_count"])
+        return True
 
     # -- state
 
