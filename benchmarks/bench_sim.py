@@ -40,13 +40,31 @@ def prepare(args) -> None:
     print(f"wrote {args.out}: tshirt {g.vertex_count} vertices, body {verts.shape[1]} vertices x {len(verts)} frames")
 
 
+def _batch(d, n: int, device: str, frames: int, config):
+    """``n`` copies of the prepared T-shirt scene as one model: (model, solver, metrics, state a,
+    state c, control, the body's frames tiled per scene)."""
+    from datagen.sim.metrics import Metrics
+    from datagen.sim.model import ClothModelBuilder
+    from datagen.sim.solver import SolverVBD
+    from datagen.sim.state import BodyControl, ClothState
+
+    body = d["body"]
+    b = ClothModelBuilder()
+    for s in range(n):
+        b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s, material_frames=d["frames"])
+        b.add_body(body[0], d["body_faces"], scene=s, face_part=d["body_face_part"] if "body_face_part" in d else None)
+    m = b.finalize(device)
+    solver = SolverVBD(m, config)
+    a, c = ClothState.from_model(m), ClothState.from_model(m)
+    ctrl = BodyControl.from_numpy(m, np.tile(body[0], (n, 1)))
+    solver.reset_body(ctrl)
+    return m, solver, Metrics(m), a, c, ctrl, [np.tile(f, (n, 1)) for f in body[:frames + 1]]
+
+
 def run(args) -> None:
     import warp as wp
 
-    from datagen.sim.metrics import Metrics
-    from datagen.sim.model import ClothModelBuilder
-    from datagen.sim.solver import SolverConfig, SolverVBD
-    from datagen.sim.state import BodyControl, ClothState
+    from datagen.sim.solver import SolverConfig
 
     d = np.load(args.inputs)
     body = d["body"]
@@ -61,21 +79,10 @@ def run(args) -> None:
     for self_col, graph, n in [(on_off[sc], on_off[g], int(b)) for sc in args.self.split(",")
                                for g in args.cuda_graph.split(",")
                                for b in args.batches.split(",")]:
-        b = ClothModelBuilder()
-        for s in range(n):
-            b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s,
-                        material_frames=d["frames"])
-            b.add_body(body[0], d["body_faces"], scene=s,
-                       face_part=d["body_face_part"] if "body_face_part" in d else None)
         wp.synchronize()
         mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
-        m = b.finalize(str(dev))
-        solver = SolverVBD(m, SolverConfig(self_collision=self_col, cuda_graph=graph))
-        metrics = Metrics(m)
-        a, c = ClothState.from_model(m), ClothState.from_model(m)
-        ctrl = BodyControl.from_numpy(m, np.tile(body[0], (n, 1)))
-        solver.reset_body(ctrl)
-        frames = [np.tile(f, (n, 1)) for f in body[:args.frames + 1]]
+        m, solver, metrics, a, c, ctrl, frames = _batch(d, n, str(dev), args.frames,
+                                                         SolverConfig(self_collision=self_col, cuda_graph=graph))
         for _ in range(2):  # warm-up: compiles kernels, captures the two graphs (a -> c, c -> a)
             solver.step(a, c, ctrl, 1 / 30)
             a, c = c, a
@@ -94,7 +101,139 @@ def run(args) -> None:
               flush=True)
         # free this batch's device memory now, not while the next batch is being measured (its
         # MB/scene read -4,586 when the 256-scene batch's pool was released inside the next one's)
-        del m, solver, metrics, a, c, ctrl, frames, b
+        del m, solver, metrics, a, c, ctrl, frames
+        gc.collect()
+        wp.synchronize()
+
+
+def _settings(items: list[str]) -> dict:
+    """``KEY=VALUE`` items as ``SolverConfig`` keyword arguments, each of its field's type."""
+    from datagen.sim.solver import SolverConfig
+
+    def value(key: str, text: str):
+        default = getattr(SolverConfig(), key)  # an unknown key fails here (AttributeError)
+        if isinstance(default, bool):
+            return {"true": True, "on": True, "1": True, "false": False, "off": False, "0": False}[text.lower()]
+        return type(default)(text)
+
+    return {k: value(k, v) for k, v in (item.split("=", 1) for item in items)}
+
+
+PHASES = {  # kernel (or native call) -> phase of a substep
+    "interpolate_body": "body: pose and refit", "mesh_refit": "body: pose and refit",
+    "detect_body": "body: contact query", "predict_body_friction": "body: contact query",
+    "body_contact_force": "body: contact query", "project_out_of_body": "body: projection",
+    "face_bounds": "cloth-cloth detection", "edge_bounds": "cloth-cloth detection", "bvh_refit": "cloth-cloth detection",
+    "detect_vertex_triangle": "cloth-cloth detection", "detect_edge_edge": "cloth-cloth detection",
+    "sort_lists": "cloth-cloth detection", "count_needed": "cloth-cloth detection", "finish_bounds": "cloth-cloth detection",
+    "solve_colour": "sweeps", "copy_colour": "sweeps", "chebyshev": "sweeps",
+}
+
+
+def _phase(name: str) -> str:
+    for key, phase in PHASES.items():
+        if key in name:
+            return phase
+    if any(k in name for k in ("membrane_product", "bending_product", "gather_product", "chunk_dot", "scene_sum",
+                               "cg_", "vertex_force_diagonal", "element_diagonal", "invert_blocks", "apply_step")):
+        return "global step"
+    if "refit" in name.lower() or "bvh" in name.lower() or "mesh" in name.lower():
+        return "BVH/mesh builtins"
+    if "memcpy" in name.lower() or "memset" in name.lower() or name.startswith(("copy", "fill", "zero")):
+        return "copies and fills"
+    return "other per-substep"
+
+
+def profile(args) -> None:
+    """Where a frame's time goes: per kernel and per phase, at each batch size.
+
+    On CUDA, warp's kernel timers (CUDA events around every launch, warp's own builtin kernels
+    such as the BVH refits included) time the step launched without a CUDA graph; the same step
+    replayed as a graph is timed beside it, the rate the pipeline gets. On the CPU every launch is
+    synchronous, so each launch (and each native refit) is timed by the wall clock around it.
+    """
+    import warp as wp
+
+    from datagen.sim.solver import SolverConfig
+
+    d = np.load(args.inputs)
+    wp.init()
+    dev = wp.get_device(args.device)
+    on_off = {"on": True, "off": False}
+    kw = _settings(args.set)
+    print(f"device {dev} ({dev.name}); tshirt {len(d['garment'])} vertices; {args.frames} profiled frames; "
+          f"{SolverConfig(**kw)}")
+    for self_col, n in [(on_off[sc], int(b)) for sc in args.self.split(",") for b in args.batches.split(",")]:
+        m, solver, _metrics, a, c, ctrl, frames = _batch(d, n, str(dev), args.frames + 2,
+                                                          SolverConfig(self_collision=self_col, cuda_graph=False, **kw))
+        graph_ms = float("nan")
+        for _ in range(2):
+            solver.step(a, c, ctrl, 1 / 30)
+            a, c = c, a
+        if dev.is_cuda:  # the rate as the pipeline runs it: replayed graphs
+            solver.config = SolverConfig(self_collision=self_col, cuda_graph=True, **kw)
+            for f in frames[1:3]:
+                ctrl.set(f)
+                solver.step(a, c, ctrl, 1 / 30)
+                a, c = c, a
+            wp.synchronize()
+            t = time.perf_counter()
+            for f in frames[3:]:
+                ctrl.set(f)
+                solver.step(a, c, ctrl, 1 / 30)
+                a, c = c, a
+            wp.synchronize()
+            graph_ms = 1000 * (time.perf_counter() - t) / (len(frames) - 3)
+            solver.config = SolverConfig(self_collision=self_col, cuda_graph=False, **kw)
+        times: dict[str, list] = {}
+        wp.synchronize()
+        t = time.perf_counter()
+        if dev.is_cuda:
+            wp.timing_begin(cuda_filter=wp.TIMING_KERNEL | wp.TIMING_KERNEL_BUILTIN | wp.TIMING_MEMCPY
+                            | wp.TIMING_MEMSET)
+            for f in frames[3:]:
+                ctrl.set(f)
+                solver.step(a, c, ctrl, 1 / 30)
+                a, c = c, a
+            for r in wp.timing_end():
+                times.setdefault(r.name, []).append(r.elapsed)
+        else:
+            launch, mesh_refit, bvh_refit = wp.launch, wp.Mesh.refit, wp.Bvh.refit
+
+            def timed(name, fn):
+                def call(*a_, **k_):
+                    t0 = time.perf_counter()
+                    out = fn(*a_, **k_)
+                    times.setdefault(name(*a_), []).append(1000 * (time.perf_counter() - t0))
+                    return out
+                return call
+            wp.launch = timed(lambda kernel, *_: kernel.key, launch)
+            wp.Mesh.refit = timed(lambda *_: "mesh_refit (native)", mesh_refit)
+            wp.Bvh.refit = timed(lambda *_: "bvh_refit (native)", bvh_refit)
+            try:
+                for f in frames[3:]:
+                    ctrl.set(f)
+                    solver.step(a, c, ctrl, 1 / 30)
+                    a, c = c, a
+            finally:
+                wp.launch, wp.Mesh.refit, wp.Bvh.refit = launch, mesh_refit, bvh_refit
+        wp.synchronize()
+        wall_ms = 1000 * (time.perf_counter() - t) / (len(frames) - 3)
+        nf = len(frames) - 3
+        total = sum(sum(v) for v in times.values()) / nf
+        print(f"\n== batch {n}, self-collision {'on' if self_col else 'off'}: {wall_ms:.1f} ms/frame launched "
+              f"one by one (timed), {graph_ms:.1f} ms/frame as a CUDA graph, {n / graph_ms * 1000 if dev.is_cuda else n / wall_ms * 1000:.1f} "
+              f"garment-frames/s; timed work {total:.1f} ms/frame in {sum(len(v) for v in times.values()) / nf:.0f} launches")
+        phases: dict[str, float] = {}
+        for name, v in times.items():
+            phases[_phase(name)] = phases.get(_phase(name), 0.0) + sum(v) / nf
+        for ph, ms in sorted(phases.items(), key=lambda kv: -kv[1]):
+            print(f"  {ph:<28} {ms:9.2f} ms/frame {100 * ms / total:5.1f} %")
+        print(f"  {'kernel':<44} {'launches/frame':>14} {'ms/frame':>9} {'share':>6} {'us/launch':>9}")
+        for name, v in sorted(times.items(), key=lambda kv: -sum(kv[1]))[:args.top]:
+            ms = sum(v) / nf
+            print(f"  {name[:44]:<44} {len(v) / nf:14.0f} {ms:9.2f} {100 * ms / total:5.1f}% {1000 * ms / (len(v) / nf):9.1f}")
+        del m, solver, a, c, ctrl, frames
         gc.collect()
         wp.synchronize()
 
@@ -140,7 +279,8 @@ def run_scenes(args) -> None:
                                                             **({} if args.friction_pressure is None else
                                                                {"friction_pressure": args.friction_pressure}),
                                                             **({} if args.global_iterations is None else
-                                                               {"global_iterations": args.global_iterations})))
+                                                               {"global_iterations": args.global_iterations}),
+                                                            **_settings(args.set)))
     print(f"{len(scenes)} scenes in one batch, device {args.device}, {config}", flush=True)
     t0 = time.perf_counter()
 
@@ -188,6 +328,15 @@ def main() -> None:
     p.add_argument("--cuda-graph", default="on", help="on, off or on,off: replay each step as a CUDA graph (CUDA only)")
     p.add_argument("--self", default="on,off", help="self-collision settings to run: on, off or on,off")
     p.set_defaults(func=run)
+    p = sub.add_parser("profile", help="time per kernel and per phase of a frame")
+    p.add_argument("--inputs", default="sim_inputs.npz")
+    p.add_argument("--device", default="cpu")
+    p.add_argument("--batches", default="1")
+    p.add_argument("--frames", type=int, default=3, help="profiled frames (after warm-up frames)")
+    p.add_argument("--self", default="on", help="self-collision settings to run: on, off or on,off")
+    p.add_argument("--top", type=int, default=25, help="kernels listed")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a SolverConfig field (repeatable)")
+    p.set_defaults(func=profile)
     p = sub.add_parser("prepare-runs", help="scenes for the long-run check (garments x motions)")
     p.add_argument("--out", default="sim_runs.pkl")
     p.add_argument("--garments", default="tshirt,dress,pants")
@@ -209,6 +358,7 @@ def main() -> None:
     p.add_argument("--global-iterations", type=int, default=None,
                    help="conjugate-gradient iterations of the global step (default: SolverConfig's; 0: sweeps alone)")
     p.add_argument("--out-dir", default=None, help="per-scene metrics (.npz) go here")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a SolverConfig field (repeatable)")
     p.set_defaults(func=run_scenes)
     args = ap.parse_args()
     args.func(args)

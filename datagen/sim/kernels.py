@@ -432,8 +432,13 @@ def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.a
                      nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32), query: float,
                      contact_radius: float, ee_count: wp.array(dtype=wp.int32), ee_edge: wp.array2d(dtype=wp.int32),
                      min_dist: wp.array(dtype=float)):
-    """Edge-edge pairs of the cloth closer than ``contact_radius`` (each edge stores its own);
-    edges next to each other are treated as in :func:`detect_vertex_triangle`."""
+    """Edge-edge pairs of the cloth closer than ``contact_radius``, stored in both edges' lists
+    (``ee_count`` must start at zero; the rows are sorted afterwards); edges next to each other are
+    treated as in :func:`detect_vertex_triangle`.
+
+    Each pair is measured once, by the thread of its lower edge: the search box of either edge,
+    grown by ``query``, finds the other, so the higher edge's thread skips it.
+    """
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
@@ -443,16 +448,15 @@ def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.a
     hi = wp.max(pa, pb) + wp.vec3(query)
     qry = wp.bvh_query_aabb(edge_bvh, lo, hi, wp.bvh_get_group_root(edge_bvh, scene[a]))
     f = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
-    n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     cap = ee_edge.shape[1]
     while wp.bvh_query_next(qry, f):
-        if f == e:
+        if f <= e:
             continue
         c = edges[f, 0]
         d = edges[f, 1]
         if a == c or a == d or b == c or b == d:
             continue
-        st = wp.closest_point_edge_edge(x[a], x[b], x[c], x[d], 1.0e-12)
+        st = wp.closest_point_edge_edge(pa, pb, x[c], x[d], 1.0e-12)
         dist = st[2]
         if dist > query:
             continue
@@ -467,11 +471,15 @@ def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.a
         else:
             wp.atomic_min(min_dist, a, dist)
             wp.atomic_min(min_dist, b, dist)
+            wp.atomic_min(min_dist, c, dist)
+            wp.atomic_min(min_dist, d, dist)
         if dist < contact_radius:
-            if n < cap:
-                ee_edge[e, n] = f
-            n += 1
-    ee_count[e] = n
+            k = wp.atomic_add(ee_count, e, 1)
+            if k < cap:
+                ee_edge[e, k] = f
+            k = wp.atomic_add(ee_count, f, 1)
+            if k < cap:
+                ee_edge[f, k] = e
 
 
 @wp.kernel
@@ -959,6 +967,21 @@ def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2:
         x[i] = xi
     x_nm2[i] = x_nm1[i]
     x_nm1[i] = xi
+
+
+@wp.kernel
+def record_slip(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32),
+                normal: wp.array2d(dtype=wp.vec3), disp: wp.array2d(dtype=wp.vec3), lam: wp.array2d(dtype=float),
+                slip: wp.array(dtype=float)):
+    """How far each vertex slid along the body part whose friction acts on it next substep, over the
+    substep that just ended [m] (0 where none does): the global step's lagged slip."""
+    i = wp.tid()
+    p = friction_part(i, has, normal, lam)
+    slip[i] = 0.0
+    if p >= 0:
+        n = normal[i, p]
+        rel = (x[i] - x_prev[i]) - disp[i, p]
+        slip[i] = wp.length(rel - n * wp.dot(n, rel))
 
 
 @wp.kernel

@@ -86,7 +86,7 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
                           body_disp: wp.array2d(dtype=wp.vec3), body_lambda: wp.array2d(dtype=float),
                           friction: wp.array(dtype=float), vertex_area: wp.array(dtype=float),
                           friction_used: wp.array(dtype=float), body_friction: int, friction_pressure: float,
-                          body_k: float, eps_u: float, h: float,
+                          slip_prev: wp.array(dtype=float), body_k: float, eps_u: float, h: float,
                           force_out: wp.array(dtype=wp.vec3), diag_other: wp.array(dtype=wp.mat33)):
     """Every vertex's force (inertia, membrane with lock and damping, bending, body contact and
     friction) and the 3x3 block of the Hessian that the element products do not give (inertia,
@@ -98,7 +98,13 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
     here, so the global step does not slide cloth along the body that friction holds. (Without it
     the global step found the frictionless equilibrium every substep and the sweeps could not take
     it all back: an elastic skirt band on the hips, which narrow upwards, crept 8.5 cm up the body
-    of a person standing still, and 25 of 32 skirts of a paper-motion-like store failed on slip.)"""
+    of a person standing still, and 25 of 32 skirts of a paper-motion-like store failed on slip.)
+
+    ``body_friction`` 2 (lagged) smooths the spring below the vertex's slide of the last substep
+    (``slip_prev``) instead: a vertex that slid keeps the Coulomb force μλ at that slide, where the
+    stiff spring, linearised once, pulled it along with the skin with whatever force that took
+    (the silk dress of the long runs tore at 121 % stretch, the pants at 361 %). 1: the stiff
+    spring; 0: no friction here."""
     i = wp.tid()
     if active[i] == 0:
         force_out[i] = wp.vec3(0.0)
@@ -143,8 +149,11 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
         if best >= 0:
             limit = friction_limit(i, best, body_lambda, friction, vertex_area, friction_pressure, friction_used)
             if limit > 0.0:
+                smooth = eps_u
+                if body_friction == 2:
+                    smooth = wp.max(eps_u, slip_prev[i])
                 ff, hf = friction_force_hessian((xi - x_prev[i]) - body_disp[i, best], body_normal[i, best], limit,
-                                                eps_u)
+                                                smooth)
                 force += ff
                 hess += hf
     force_out[i] = force

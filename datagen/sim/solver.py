@@ -67,6 +67,12 @@ class SolverConfig:
             4 kPa is felt as uncomfortable); the weight of a garment about 100 Pa. At 1 kPa the
             pants on their waistband hold still; at 300 Pa they crept down 1.5 cm/s; at 3 kPa a
             patch sliding down a 35° plane dug in its front edge and lifted 12 mm.
+        global_friction: body friction in the global step: ``lagged`` (a Coulomb force smoothed
+            below the vertex's slide along the body over the last substep, so a vertex that slid is
+            held with μλ at that slide and one that stuck is held stiffly), ``stiff`` (smoothed
+            below ``friction_velocity`` x h only: a vertex in contact follows the body in the
+            linearised step with whatever force that takes) or ``off``. See
+            ``newton_kernels.vertex_force_diagonal``.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -96,6 +102,7 @@ class SolverConfig:
     friction_pressure: float = 1000.0
     cuda_graph: bool = True
     global_iterations: int = field(default=20, metadata={"min": 0, "max": 1000})
+    global_friction: str = "lagged"
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -107,6 +114,8 @@ class SolverConfig:
                 raise InputError(f"solver {name} must be > 0, got {getattr(self, name)}")
         if self.self_query <= self.self_radius:
             raise InputError(f"self_query ({self.self_query}) must exceed self_radius ({self.self_radius})")
+        if self.global_friction not in GLOBAL_FRICTION:
+            raise InputError(f"global_friction must be one of {', '.join(GLOBAL_FRICTION)}, got {self.global_friction!r}")
         if not 0.0 < self.bound_fraction < 0.5:
             raise InputError(f"bound_fraction must be in (0, 0.5), got {self.bound_fraction}: at 0.5 or more two "
                              "cloth primitives moving towards each other could meet between detections")
@@ -114,6 +123,12 @@ class SolverConfig:
             raise InputError(f"self_bound_floor ({self.self_bound_floor}) must be at most 1.5 x self_radius "
                              f"({1.5 * self.self_radius:g}), the distance within which cloth pairs are contacts")
 
+
+GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
+"""``SolverConfig.global_friction`` values and the code the global step's kernel takes."""
+
+REFIT_STREAMS = 16
+"""CUDA streams that the body meshes' refits are spread over."""
 
 GLOBAL_REDUCTION_CHUNK = 128
 """Vertices per partial sum of the global step's per-scene dot products."""
@@ -152,6 +167,7 @@ class SolverVBD:
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
             self.friction_used = wp.zeros(n, dtype=float)
+            self.slip = wp.zeros(n, dtype=float)
             self.v_old = z3(n)
             if self.config.global_iterations:  # the global step's vectors, blocks and per-scene scalars
                 self.cg_force, self.cg_r, self.cg_z, self.cg_p, self.cg_q, self.cg_d = (z3(n) for _ in range(6))
@@ -168,7 +184,7 @@ class SolverVBD:
             P = m.body_part_count
             self.body_lambda = wp.zeros((n, P), dtype=float)
             # copies of what a step carries over from the last besides the state, for a redo
-            self._lagged_saved = (wp.zeros((n, P), dtype=float), z3(n))
+            self._lagged_saved = (wp.zeros((n, P), dtype=float), z3(n), wp.zeros(n, dtype=float))
             self.body_has = wp.zeros((n, P), dtype=wp.int32)
             self.body_point, self.body_normal, self.body_disp = (wp.zeros((n, P), dtype=wp.vec3) for _ in range(3))
             self.body_radius = wp.array(m.host.thickness.astype(np.float32) + self.config.body_margin, dtype=float)
@@ -205,6 +221,11 @@ class SolverVBD:
                         (h.body_faces[h.part_faces[f0:f1]] - b0).astype(np.int32).ravel())))
                     part_ids.append(self.part_meshes[-1].id)
             self.part_ids = wp.array(np.array(part_ids, dtype=np.uint64), dtype=wp.uint64)
+            # on CUDA the meshes' refits (a few short launches each, every substep) go round several
+            # streams, so a captured graph runs them side by side instead of one after another
+            dev = wp.get_device(m.device)
+            meshes = len(self.body_meshes) + len(self.part_meshes)
+            self._refit_streams = [wp.Stream(dev) for _ in range(min(REFIT_STREAMS, meshes))] if dev.is_cuda else []
             scene_of = h.particle_scene
             self.face_bvh = wp.Bvh(self.face_lo, self.face_hi,
                                    groups=wp.array(scene_of[h.faces[:, 0]].astype(np.int32), dtype=wp.int32))
@@ -243,10 +264,24 @@ class SolverVBD:
         self._refit_body()
 
     def _refit_body(self) -> None:
-        for mesh in self.body_meshes:
-            mesh.refit()
-        for mesh in self.part_meshes:
-            mesh.refit()
+        """Refit every body mesh to ``body_sub`` (on CUDA spread over streams that wait for the
+        current stream's work and that it waits for in turn: the refits are independent)."""
+        import warp as wp
+
+        meshes = self.body_meshes + self.part_meshes
+        streams = self._refit_streams
+        if not streams:
+            for mesh in meshes:
+                mesh.refit()
+            return
+        main = wp.get_stream(self.model.device)
+        for stream in streams:
+            stream.wait_stream(main)
+        for k, mesh in enumerate(meshes):
+            with wp.ScopedStream(streams[k % len(streams)], sync_enter=False):
+                mesh.refit()
+        for stream in streams:
+            main.wait_stream(stream)
 
     def step(self, state_in, state_out, control, dt: float) -> None:
         """Advance by ``dt`` [s]; ``state_in`` is read, ``state_out`` written (they may be the same).
@@ -258,10 +293,11 @@ class SolverVBD:
         if not dt > 0:
             raise InputError(f"time step must be > 0, got {dt}")
         # what a step carries over from the last one besides the state (the body's normal forces,
-        # lagged for friction; the velocity before the last substep): a redo starts from it again,
+        # lagged for friction; the velocity before the last substep; the slide along the body over
+        # the last substep, lagged for the global step's friction): a redo starts from it again,
         # so a step redone after its buffers grew gives what a step with big enough buffers gives,
         # and a scene does not depend on whether another scene of its batch overflowed
-        lagged = (self.body_lambda, self.v_old)
+        lagged = (self.body_lambda, self.v_old, self.slip)
         if self.config.self_collision:  # only cloth-cloth contact lists can overflow
             for a, b in zip(lagged, self._lagged_saved):
                 wp.copy(b, a)
@@ -357,7 +393,8 @@ class SolverVBD:
             x, self.x_prev, self.y, m.mass, m.active, m.damping, m.faces, m.dm_inv, m.tri_area, m.tri_stiff,
             m.tri_lock, m.edges, m.rest_angle, m.bend_k, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
             self.body_has, self.body_point, self.body_normal, self.body_radius, self.body_disp, self.body_lambda,
-            m.friction, m.vertex_area, self.friction_used, int(c.body_friction), c.friction_pressure,
+            m.friction, m.vertex_area, self.friction_used,
+            GLOBAL_FRICTION[c.global_friction] if c.body_friction else 0, c.friction_pressure, self.slip,
             c.body_stiffness, eps_u, h, self.cg_force, self.cg_diag_other])
         wp.launch(N.element_diagonal, n, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.bend_k,
                                                  m.damping, h, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
@@ -449,6 +486,9 @@ class SolverVBD:
                                                       omega])
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
                                                            self.body_radius, c.body_stiffness, self.body_lambda])
+                if c.global_iterations and c.global_friction == "lagged":
+                    wp.launch(K.record_slip, n, inputs=[x, self.x_prev, self.body_has, self.body_normal, self.body_disp,
+                                                        self.body_lambda, self.slip])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v, self.v_old])
                 if c.body_projection:
                     for _ in range(2):  # a second pass for vertices the first put into another body part
