@@ -56,7 +56,10 @@ class SolverConfig:
             normal does not lead outside) may move a vertex [m].
         detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
             substep); each detection renews the move bounds from the current positions, so cloth
-            pressed between the body and other cloth can follow a fast body.
+            pressed between the body and other cloth can follow a fast body. Every 4 sweeps (five
+            detections a substep) the six long runs end as at every 2 (the same five pass, the same
+            strain to 1-2 points) in 0.76x the time; at 10 sweeps a substep instead of 20 three more
+            fail (H200, ``docs/simulator.md``).
         body_friction: Coulomb friction with the body (``kernels.body_stick_slip``); off only to
             diagnose what it does.
         friction_pressure: the largest body contact pressure that friction sees [Pa] (its normal
@@ -95,7 +98,7 @@ class SolverConfig:
     friction_velocity: float = 1.0e-3
     contact_capacity: int = 16
     chebyshev_rho: float = 0.7
-    detection_interval: int = 2
+    detection_interval: int = 4
     body_projection: bool = True
     projection_reach: float = 0.1
     body_friction: bool = True
