@@ -75,16 +75,17 @@ def main() -> None:
 
     module.eval()
     with torch.no_grad():
-        for _ in range(3):
-            module.predict_frames(one)
-        sync()
-        n, t0 = 0, time.perf_counter()
-        while time.perf_counter() - t0 < args.seconds:
-            module.predict_frames(one)
+        for frames, graph in ((1, one), (args.batch, batch)):  # one frame, and a batch of frames per call
+            for _ in range(3):
+                module.predict_frames(graph)
             sync()
-            n += 1
-        ms = 1000 * (time.perf_counter() - t0) / n
-    print(f"inference: {ms:.1f} ms per frame (batch of 1, coarse + detail features + detail; {n} runs)")
+            n, t0 = 0, time.perf_counter()
+            while time.perf_counter() - t0 < args.seconds:
+                module.predict_frames(graph)
+                sync()
+                n += 1
+            ms = 1000 * (time.perf_counter() - t0) / n / frames
+            print(f"inference: {ms:.1f} ms per frame (batch of {frames}, coarse + detail features + detail; {n} runs)")
     module.train()
     opt = torch.optim.Adam(module.parameters(), lr=1e-3)
     module.log = lambda *a, **k: None  # noqa: E731 (no trainer attached)
