@@ -5,6 +5,9 @@ needed: the weights are untrained (speed does not depend on them) and the poses 
 
     python benchmarks/bench_garment.py [--device cpu|cuda] [--vertices 2950 3274] [--batch 1 8]
 
+On CUDA each size is timed launched step by step and replayed as one captured CUDA graph
+(``GarmentRegressor.generate(graph=True)``, what ``drape evaluate`` and ``drape sample clothed`` use).
+
 Paper 001 reports 11.7-13.2 ms per frame on an RTX 3090 (about 300x ARCSim); drape's simulator on
 the same kind of garment is in docs/simulator.md's throughput table (batch 1: 287 ms per frame with
 self-collision on an H200).
@@ -42,22 +45,24 @@ def main(argv=None) -> int:
 
     name = torch.cuda.get_device_name(dev) if dev.type == "cuda" else "CPU"
     print(f"device {dev} ({name}), torch {torch.__version__}, T = {args.frames}, greedy decoding")
-    print(f"{'vertices':>8} {'params':>10} {'MB':>6} {'batch':>5} {'ms/sequence':>12} {'ms/frame':>9} {'frames/s':>9}")
+    print(f"{'vertices':>8} {'params':>10} {'MB':>6} {'batch':>5} {'graph':>5} {'ms/sequence':>12} {'ms/frame':>9} "
+          f"{'frames/s':>9}")
     for v in args.vertices:
         model = GarmentRegressor(v).to(dev).eval()
         params = sum(p.numel() for p in model.parameters())
         for b in args.batch:
             poses = torch.randn(b, args.frames, FRAME_FEATURES, device=dev)
-            model.generate(poses)  # warm-up (kernels, allocator)
-            sync()
-            t = time.perf_counter()
-            for _ in range(args.repeat):
-                model.generate(poses)
-            sync()
-            seq = (time.perf_counter() - t) / args.repeat
-            per_frame = seq / (b * args.frames)
-            print(f"{v:8d} {params:10,d} {params * 4 / 2**20:6.1f} {b:5d} {1000 * seq:12.1f} {1000 * per_frame:9.3f} "
-                  f"{1 / per_frame:9.0f}", flush=True)
+            for graph in (False, True) if dev.type == "cuda" else (False,):
+                model.generate(poses, graph=graph)  # warm-up (kernels, allocator; the graph's capture)
+                sync()
+                t = time.perf_counter()
+                for _ in range(args.repeat):
+                    model.generate(poses, graph=graph)
+                sync()
+                seq = (time.perf_counter() - t) / args.repeat
+                per_frame = seq / (b * args.frames)
+                print(f"{v:8d} {params:10,d} {params * 4 / 2**20:6.1f} {b:5d} {'on' if graph else 'off':>5} "
+                      f"{1000 * seq:12.1f} {1000 * per_frame:9.3f} {1 / per_frame:9.0f}", flush=True)
     return 0
 
 

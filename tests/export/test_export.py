@@ -20,7 +20,7 @@ from datagen.errors import InputError, MissingDependencyError
 MICRO = {
     "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07,
     "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
-                   "solver": {"substeps": 3, "iterations": 3}},
+                   "solver": {"substeps": 3, "iterations": 3, "detection_interval": 2}},
     # the fit model needs more than three training (garment, body) pairs
     "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
     "test": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},

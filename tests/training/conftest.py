@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import pytest
 
+# toy solver settings (3 substeps x 3 sweeps, 7 cm edges) for a store in a minute; a detection
+# between the sweeps, as the production default of one every 4 sweeps would leave one a substep
 MICRO_TRAIN = {
     "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07,
     "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
-                   "solver": {"substeps": 3, "iterations": 3}},
+                   "solver": {"substeps": 3, "iterations": 3, "detection_interval": 2}},
     "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
     "val": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},
     "test": {"garments": ["tshirt:2"], "bodies": ["fat"], "motions": ["walk:2"]},

@@ -21,7 +21,7 @@ MOTION_LIKE = {
     "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07, "fit_attribute": False,
     "split_disjoint": ["motions"],
     "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
-                   "solver": {"substeps": 3, "iterations": 3}},
+                   "solver": {"substeps": 3, "iterations": 3, "detection_interval": 2}},
     "train": {"garments": ["skirt:0"], "bodies": ["regular"], "motions": ["walk:0", "squat:0"]},
     "val": {"garments": ["skirt:0"], "bodies": ["regular"], "motions": ["walk:1"]},
     "test": {"garments": ["skirt:0"], "bodies": ["regular"], "motions": ["walk:2"]},
@@ -64,6 +64,41 @@ def test_decoder_is_causal_and_greedy_decoding_gives_every_frame():
     gen = m.generate(poses)
     assert gen.shape == (2, 5, 30) and torch.isfinite(gen).all()
     assert torch.equal(GarmentRegressor(10, d_model=16, heads=2, bos="zero").bos_frame(poses), torch.zeros(2, 30))
+
+
+def _prefix_greedy(m, poses):
+    """Greedy decoding of the growing prefix (the definition the static-shape decoding must equal)."""
+    memory = m.encode(poses)
+    frames = [m.bos_frame(poses)[:, None]]
+    for _ in range(poses.shape[1]):
+        frames.append(m._decode(torch.cat(frames, dim=1), memory)[:, -1:])
+    return torch.cat(frames[1:], dim=1)
+
+
+def test_static_shape_greedy_decoding_equals_decoding_the_growing_prefix():
+    from training.garment.model import GarmentRegressor
+
+    torch.manual_seed(1)
+    m = GarmentRegressor(40, d_model=32, heads=2, feedforward=64, bos_hidden=(16, 16)).eval()
+    poses = torch.randn(3, 9, 147)
+    with torch.no_grad():
+        ref = _prefix_greedy(m, poses)
+    out = m.generate(poses)
+    assert out.shape == ref.shape == (3, 9, 120)
+    assert torch.allclose(out, ref, atol=1e-5), (out - ref).abs().max()
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA device: CUDA graphs exist only there")
+def test_greedy_decoding_replayed_as_a_cuda_graph_equals_plain_decoding():
+    from training.garment.model import GarmentRegressor
+
+    torch.manual_seed(2)
+    m = GarmentRegressor(40, d_model=32, heads=2, feedforward=64, bos_hidden=(16, 16)).cuda().eval()
+    for seed in (0, 1):  # the second input replays the graph captured for the first
+        poses = torch.randn(2, 7, 147, generator=torch.Generator().manual_seed(seed)).cuda()
+        plain = m.generate(poses)
+        graphed = m.generate(poses, graph=True)
+        assert torch.allclose(graphed, plain, atol=1e-5), (graphed - plain).abs().max()
 
 
 def test_batches_grow_as_the_paper_says():

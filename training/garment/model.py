@@ -65,11 +65,45 @@ class GarmentRegressor(nn.Module):
         return self._decode(inputs, memory)
 
     @torch.no_grad()
-    def generate(self, poses: torch.Tensor) -> torch.Tensor:
-        """Greedy decoding: frames [B, T, V*3] from the poses alone."""
+    def generate(self, poses: torch.Tensor, graph: bool = False) -> torch.Tensor:
+        """Greedy decoding: frames [B, T, V*3] from the poses alone.
+
+        Every step decodes the whole buffer of T + 1 frames (BOS, then what is predicted so far)
+        and keeps the output at the newest position: the causal mask makes it depend on the
+        frames before it only, so it is what decoding the growing prefix gives (to float rounding),
+        with the same shapes at every step. That lets ``graph=True`` on a CUDA device (the model in
+        eval mode) capture the T steps once per input shape as one CUDA graph and replay it:
+        without it, a sequence costs the host's launch overhead of every step's hundred kernels.
+        """
+        if graph and poses.is_cuda and not self.training:
+            return self._graphed(poses)
+        return self._generate_static(poses)
+
+    def _generate_static(self, poses: torch.Tensor) -> torch.Tensor:
+        B, T = poses.shape[:2]
         memory = self.encode(poses)
-        frames = [self.bos_frame(poses)[:, None]]
-        for _ in range(poses.shape[1]):
-            out = self._decode(torch.cat(frames, dim=1), memory)
-            frames.append(out[:, -1:])
-        return torch.cat(frames[1:], dim=1)
+        first = self.bos_frame(poses)
+        frames = first.new_zeros(B, T + 1, self.vertices * 3)
+        frames[:, 0] = first
+        for t in range(T):
+            frames[:, t + 1] = self._decode(frames, memory)[:, t]
+        return frames[:, 1:]
+
+    def _graphed(self, poses: torch.Tensor) -> torch.Tensor:
+        key = (tuple(poses.shape), poses.dtype, poses.device, torch.is_autocast_enabled())
+        graphs = self.__dict__.setdefault("_graphs", {})  # not a submodule, not in the state dict
+        if key not in graphs:
+            static_in = poses.clone()
+            side = torch.cuda.Stream(poses.device)
+            side.wait_stream(torch.cuda.current_stream(poses.device))
+            with torch.cuda.stream(side):  # warm-up outside the capture (cuBLAS handles, allocator)
+                self._generate_static(static_in)
+            torch.cuda.current_stream(poses.device).wait_stream(side)
+            g = torch.cuda.CUDAGraph()
+            with torch.cuda.graph(g):
+                static_out = self._generate_static(static_in)
+            graphs[key] = (g, static_in, static_out)
+        g, static_in, static_out = graphs[key]
+        static_in.copy_(poses)
+        g.replay()
+        return static_out.clone()

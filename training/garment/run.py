@@ -196,7 +196,7 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
         x, gt = module.targets(batch)
         B, T = gt.shape[:2]
         true = gt.reshape(B, T, -1, 3) / scale
-        pred = module.model.generate(x).float().reshape(B, T, -1, 3) / scale
+        pred = module.model.generate(x, graph=True).float().reshape(B, T, -1, 3) / scale
         skinned = batch["skin"].float()
         n_true = _normals(true.reshape(B * T, -1, 3), faces)
         for who, p in (("model", pred), ("skinned", skinned)):
@@ -276,7 +276,8 @@ def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = Non
     rot = axis_angle_to_matrix(poses_t)
     x = frames_to_features(rot[None], trans_t[None])
     t0 = time.perf_counter()
-    garment = module.model.generate(x).float()[0].reshape(len(poses_t), -1, 3) / module.scale + trans_t[:, None]
+    garment = module.model.generate(x, graph=True).float()[0].reshape(len(poses_t), -1, 3) / module.scale
+    garment = garment + trans_t[:, None]
     seconds = time.perf_counter() - t0
     g = int(meta["template"])
     template = store.garment(g)

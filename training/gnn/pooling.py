@@ -30,35 +30,40 @@ HANDSHAKE_ROUNDS = 16
 
 def handshake_matching(edge_index: torch.Tensor, score: torch.Tensor, num_nodes: int,
                        rounds: int = HANDSHAKE_ROUNDS) -> torch.Tensor:
-    """A matching of the graph as the chosen edge of each node's pair ([N], -1 for unmatched nodes)."""
+    """A matching of the graph as the chosen edge of each node's pair ([N], -1 for unmatched nodes).
+
+    ``edge_index`` holds each directed edge at most once (coalesced). Nothing here waits for the
+    device: the rounds run in full (a round after the matching is complete changes nothing), and
+    no tensor's size depends on the data, so on a GPU the host queues the work without a sync.
+    """
     src, dst = edge_index
     E = src.numel()
+    if E == 0:
+        return torch.full((num_nodes,), -1, dtype=torch.long, device=src.device)
     eid = torch.arange(E, device=src.device)
     # one score per undirected edge (the larger of its two directions): then the best free edge
     # anywhere is the best of both its ends, so every round contracts at least one pair per component
-    key = torch.minimum(src, dst) * num_nodes + torch.maximum(src, dst)
-    _, inverse = torch.unique(key, return_inverse=True)
-    undirected = torch.full((int(inverse.max()) + 1 if E else 0,), -torch.inf, dtype=score.dtype, device=src.device)
-    score = undirected.scatter_reduce(0, inverse, score, reduce="amax")[inverse]
+    key = src * num_nodes + dst
+    order = torch.argsort(key)
+    sorted_key = key[order]
+    at = torch.searchsorted(sorted_key, dst * num_nodes + src).clamp_max(E - 1)
+    reverse = order[at]
+    has_reverse = sorted_key[at] == dst * num_nodes + src
+    score = torch.where(has_reverse, torch.maximum(score, score[reverse]), score)
+    nodes = torch.arange(num_nodes, device=src.device)
     matched_edge = torch.full((num_nodes,), -1, dtype=torch.long, device=src.device)
     for _ in range(rounds):
         free = (src != dst) & (matched_edge[src] < 0) & (matched_edge[dst] < 0)
-        if not bool(free.any()):
-            break
         s = torch.where(free, score, torch.full_like(score, -torch.inf))
         best = torch.full((num_nodes,), -torch.inf, dtype=score.dtype, device=src.device)
         best = best.scatter_reduce(0, src, s, reduce="amax")
         is_best = free & (s == best[src])
         pick = torch.full((num_nodes,), E, dtype=torch.long, device=src.device)
-        pick = pick.scatter_reduce(0, src[is_best], eid[is_best], reduce="amin")  # lowest index among ties
+        pick = pick.scatter_reduce(0, src, torch.where(is_best, eid, E), reduce="amin")  # lowest index among ties
         has = pick < E
-        proposal = torch.full((num_nodes,), -1, dtype=torch.long, device=src.device)
-        proposal[has] = dst[pick[has]]
-        nodes = torch.nonzero(has).flatten()
-        mutual = nodes[proposal[proposal[nodes]] == nodes]
-        if mutual.numel() == 0:
-            break
-        matched_edge[mutual] = pick[mutual]
+        proposal = torch.where(has, dst[pick.clamp_max(E - 1)], -1)
+        mutual = has & (proposal[proposal.clamp_min(0)] == nodes)
+        matched_edge = torch.where(mutual, pick, matched_edge)
     return matched_edge
 
 
