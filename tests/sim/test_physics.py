@@ -402,6 +402,46 @@ def test_patch_on_tilted_plane_obeys_coulomb_friction(angle):
         assert slide < (coulomb + frictionless) / 2
 
 
+def test_a_strip_on_a_slow_belt_is_held_by_coulomb_friction_and_no_more():
+    """A 50 cm strip (k = 120 N/m, ν = 0.3, ρ = 0.2 kg/m², μ = 0.5) lies on a plane that moves
+    along it at 3 mm/s, its upstream edge pinned. Once the belt has slid under all of it, every
+    vertex is pulled downstream by μ ρ g per area, and the strip stands stretched by the 1-D StVK
+    answer with μ ρ g for the load (k less the Poisson coupling, as the hanging strips): 1.118 mm.
+    It must come within 5 %, averaged over the last 0.5 s of 1.5 s. The belt is slow so that a
+    vertex's slide over a substep (10 µm) is near the friction's smoothing (3.3 µm): with the global
+    step's friction a stiff spring there (``global_friction = "stiff"``, the code of 2026-11-25)
+    the strip was dragged 32 % further than Coulomb allows; this is what tore the long runs."""
+    mu, rho, k, nu, speed, L = 0.5, 0.2, 120.0, 0.3, 0.003, 0.5
+    material = Material(name="belt-test", density=rho, stretch_warp=k, stretch_weft=k, shear=20.0, poisson=nu,
+                        bending=1e-6, friction=mu, thickness=0.0015)
+    r = material.thickness + MARGIN
+    nx, nz, dx = 51, 6, 0.01
+    X, Z = np.meshgrid(np.arange(nx) * dx, np.arange(nz) * dx, indexing="ij")
+    v = np.stack([X.ravel(), np.full(X.size, r), Z.ravel()], 1)
+    f = np.array([[i * nz + j, i * nz + j + 1, (i + 1) * nz + j + 1] for i in range(nx - 1) for j in range(nz - 1)]
+                 + [[i * nz + j, (i + 1) * nz + j + 1, (i + 1) * nz + j] for i in range(nx - 1) for j in range(nz - 1)])
+    pinned, end = np.flatnonzero(np.isclose(v[:, 0], 0.0)), np.flatnonzero(np.isclose(v[:, 0], L))
+    frames = np.tile(np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0]]), (len(f), 1, 1))  # weft Z, warp X
+    exact = stvk_strip_elongation(k - (nu * k) ** 2 / k, mu * rho, L)
+    model = build((v, f), material=material, body=plane(3.0), pinned=pinned, frames=frames)
+    elong = []
+    s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
+    control = BodyControl.from_numpy(model, model.host.body_rest)
+    solver = SolverVBD(model, SolverConfig(self_collision=False))
+    for frame in range(int(1.5 * FPS)):
+        control.set((model.host.body_rest + np.array([speed * (frame + 1) * DT, 0.0, 0.0])).astype(np.float32))
+        solver.step(s0, s1, control, DT)
+        s0, s1 = s1, s0
+        x, _ = s0.numpy()
+        elong.append(float(x[end, 0].mean()) - L)
+    last = np.array(elong[-STRIP_WINDOW:])
+    print(f"\nstrip on a belt at {speed * 1e3:.0f} mm/s: elongation {last.mean() * 1e3:.3f} mm "
+          f"(range {last.min() * 1e3:.3f}..{last.max() * 1e3:.3f}), Coulomb {exact * 1e3:.3f} mm "
+          f"({100 * (last.mean() - exact) / exact:+.1f} %); height {x[:, 1].min() * 1e3:.2f}..{x[:, 1].max() * 1e3:.2f} mm")
+    assert np.all(np.abs(x[:, 1] - r) < 5e-4)  # stays on the belt
+    assert abs(last.mean() - exact) < 0.05 * exact
+
+
 def test_friction_sees_at_most_the_capped_contact_pressure():
     """The patch of the slope test on a 20° slope (μ = 0.5, areal density 0.13 kg/m²) presses on it
     with ρ g cos a = 1.20 Pa and sticks (tan a < μ). With friction's contact pressure capped at
