@@ -61,6 +61,15 @@ def _batch(d, n: int, device: str, frames: int, config):
     return m, solver, Metrics(m), a, c, ctrl, [np.tile(f, (n, 1)) for f in body[:frames + 1]]
 
 
+def _play(solver, a, c, ctrl, frames):
+    """Step once per body frame of ``frames`` (a -> c, then c -> a, ...); the states, latest first."""
+    for f in frames:
+        ctrl.set(f)
+        solver.step(a, c, ctrl, 1 / 30)
+        a, c = c, a
+    return a, c
+
+
 def run(args) -> None:
     import warp as wp
 
@@ -88,10 +97,7 @@ def run(args) -> None:
             a, c = c, a
         wp.synchronize()
         t = time.perf_counter()
-        for f in frames[1:]:
-            ctrl.set(f)
-            solver.step(a, c, ctrl, 1 / 30)
-            a, c = c, a
+        a, c = _play(solver, a, c, ctrl, frames[1:])
         wp.synchronize()
         dt = (time.perf_counter() - t) / (len(frames) - 1)
         mem = (wp.get_mempool_used_mem_current(dev) - mem0) / n / 2**20 if dev.is_cuda else float("nan")
@@ -172,16 +178,10 @@ def profile(args) -> None:
             a, c = c, a
         if dev.is_cuda:  # the rate as the pipeline runs it: replayed graphs
             solver.config = SolverConfig(self_collision=self_col, cuda_graph=True, **kw)
-            for f in frames[1:3]:
-                ctrl.set(f)
-                solver.step(a, c, ctrl, 1 / 30)
-                a, c = c, a
+            a, c = _play(solver, a, c, ctrl, frames[1:3])
             wp.synchronize()
             t = time.perf_counter()
-            for f in frames[3:]:
-                ctrl.set(f)
-                solver.step(a, c, ctrl, 1 / 30)
-                a, c = c, a
+            a, c = _play(solver, a, c, ctrl, frames[3:])
             wp.synchronize()
             graph_ms = 1000 * (time.perf_counter() - t) / (len(frames) - 3)
             solver.config = SolverConfig(self_collision=self_col, cuda_graph=False, **kw)
@@ -191,10 +191,7 @@ def profile(args) -> None:
         if dev.is_cuda:
             wp.timing_begin(cuda_filter=wp.TIMING_KERNEL | wp.TIMING_KERNEL_BUILTIN | wp.TIMING_MEMCPY
                             | wp.TIMING_MEMSET)
-            for f in frames[3:]:
-                ctrl.set(f)
-                solver.step(a, c, ctrl, 1 / 30)
-                a, c = c, a
+            a, c = _play(solver, a, c, ctrl, frames[3:])
             for r in wp.timing_end():
                 times.setdefault(r.name, []).append(r.elapsed)
         else:
@@ -211,10 +208,7 @@ def profile(args) -> None:
             wp.Mesh.refit = timed(lambda *_: "mesh_refit (native)", mesh_refit)
             wp.Bvh.refit = timed(lambda *_: "bvh_refit (native)", bvh_refit)
             try:
-                for f in frames[3:]:
-                    ctrl.set(f)
-                    solver.step(a, c, ctrl, 1 / 30)
-                    a, c = c, a
+                a, c = _play(solver, a, c, ctrl, frames[3:])
             finally:
                 wp.launch, wp.Mesh.refit, wp.Bvh.refit = launch, mesh_refit, bvh_refit
         wp.synchronize()
