@@ -167,6 +167,26 @@ def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
     assert not (tmp_path / "x").exists()
 
 
+def test_a_gat_block_on_precomputed_self_loops_equals_gatconv_adding_them_itself():
+    """The blocks take the graph with its self-loops made once per level (``with_self_loops``);
+    each block's attention must give exactly what ``GATConv`` with its own self-loops gives."""
+    from torch_geometric.nn import GATConv
+
+    from training.gnn.model import GATBlock, with_self_loops
+
+    torch.manual_seed(0)
+    n = 40
+    edges = torch.randint(0, n, (2, 160))
+    edges[:, :5] = torch.arange(5).repeat(2, 1)  # a few self-loops already there
+    x = torch.randn(n, 12)
+    block = GATBlock(12, 32)
+    reference = GATConv(12, 4, heads=4, concat=True)  # adds self-loops itself (the default)
+    reference.load_state_dict(block.attention.state_dict())
+    out = block(x, with_self_loops(edges, n))
+    assert torch.equal(out[:, 16:], reference(x, edges))
+    assert torch.equal(out[:, :16], block.self_stream(x))
+
+
 def test_handshake_matching_is_a_matching_of_graph_edges_and_pooling_round_trips():
     from training.gnn.pooling import FastEdgePooling, handshake_matching
 

@@ -40,8 +40,18 @@ def _kaiming(layer: nn.Linear) -> nn.Linear:
     return layer
 
 
+def with_self_loops(edge_index: torch.Tensor, num_nodes: int) -> torch.Tensor:
+    """``edge_index`` with its self-loops replaced by one per node, as ``GATConv`` makes it for
+    itself by default: done once per graph and level instead of in every block (each time a mask,
+    so on a GPU a wait for the device)."""
+    from torch_geometric.utils import add_self_loops, remove_self_loops
+
+    return add_self_loops(remove_self_loops(edge_index)[0], num_nodes=num_nodes)[0]
+
+
 class GATBlock(nn.Module):
-    """Graph attention plus the self-reinforced stream: ``[W x_i ‖ GAT(x)_i]``, ``out`` features."""
+    """Graph attention plus the self-reinforced stream: ``[W x_i ‖ GAT(x)_i]``, ``out`` features.
+    ``forward`` takes the graph with its self-loops (:func:`with_self_loops`)."""
 
     def __init__(self, in_channels: int, out_channels: int, heads: int = 4):
         from torch_geometric.nn import GATConv
@@ -51,10 +61,11 @@ class GATBlock(nn.Module):
         if half % heads or out_channels % 2:
             raise ValueError(f"a GAT block of {out_channels} features needs half of them divisible by {heads} heads")
         self.self_stream = _kaiming(nn.Linear(in_channels, half))
-        self.attention = GATConv(in_channels, half // heads, heads=heads, concat=True)  # Glorot inside
+        self.attention = GATConv(in_channels, half // heads, heads=heads, concat=True,  # Glorot inside
+                                 add_self_loops=False)
 
-    def forward(self, x: torch.Tensor, edge_index: torch.Tensor) -> torch.Tensor:
-        return torch.cat([self.self_stream(x), self.attention(x, edge_index)], dim=-1)
+    def forward(self, x: torch.Tensor, loops: torch.Tensor) -> torch.Tensor:
+        return torch.cat([self.self_stream(x), self.attention(x, loops)], dim=-1)
 
 
 def _mlp(sizes: list[int], activation: type[nn.Module], last: nn.Module | None) -> nn.Sequential:
@@ -87,16 +98,19 @@ class _Branch(nn.Module):
             self.pool = FastEdgePooling(widths[pool_after])
         self.head = _mlp([c, *head], activation, last)
 
-    def forward(self, x: torch.Tensor, edge_index: torch.Tensor, batch: torch.Tensor) -> torch.Tensor:
+    def forward(self, x: torch.Tensor, edge_index: torch.Tensor, batch: torch.Tensor,
+                loops: torch.Tensor) -> torch.Tensor:
+        """``loops``: ``edge_index`` with its self-loops (:func:`with_self_loops`)."""
         info = None
-        e = edge_index
+        e, e_loops = edge_index, loops
         for k, block in enumerate(self.blocks):
             if info is not None and k == len(self.blocks) - 1:  # unpool before the last block
                 x, e, batch = self.pool.unpool(x, info)
-                info = None
-            x = self.act(block(x, e))
+                e_loops, info = loops, None
+            x = self.act(block(x, e_loops))
             if self.pool_after is not None and k == self.pool_after:
                 x, e, batch, info = self.pool(x, e, batch)
+                e_loops = with_self_loops(e, x.size(0))
         if info is not None:
             x, e, batch = self.pool.unpool(x, info)
         return self.head(x)
@@ -123,12 +137,12 @@ class _Output(nn.Module):
             self.direct = _Branch(in_channels, wide, [*[int(round(h * ONE_BRANCH_SCALE)) for h in head], 3], nn.ReLU,
                                   last, pool_after=pool_after)
 
-    def forward(self, x, edge_index, batch) -> torch.Tensor:
+    def forward(self, x, edge_index, batch, loops) -> torch.Tensor:
         if self.mode == "decomposed":
-            m = self.magnitude(x, edge_index, batch)
-            d = nn.functional.normalize(self.direction(x, edge_index, batch), dim=-1)
+            m = self.magnitude(x, edge_index, batch, loops)
+            d = nn.functional.normalize(self.direction(x, edge_index, batch, loops), dim=-1)
             return m * d
-        out = self.direct(x, edge_index, batch)
+        out = self.direct(x, edge_index, batch, loops)
         return OUTPUT_LIMIT * out if self.mode == "limited" else out
 
 
@@ -145,7 +159,8 @@ class CoarseNet(nn.Module):
         self.out = _Output(256, [512, 512, 256], [256, 128], mode=_mode(ablation))
 
     def forward(self, x, edge_index, batch) -> torch.Tensor:
-        return self.out(torch.tanh(self.first(x, edge_index)), edge_index, batch)
+        loops = with_self_loops(edge_index, x.size(0))
+        return self.out(torch.tanh(self.first(x, loops)), edge_index, batch, loops)
 
 
 class ParserNet(nn.Module):
@@ -177,13 +192,14 @@ class DetailNet(nn.Module):
 
     def forward(self, x, edge_index, batch, attributes) -> torch.Tensor:
         per_node = attributes[batch]
+        loops = with_self_loops(edge_index, x.size(0))
         if self.parser is None:
-            h = torch.tanh(self.first(torch.cat([x, per_node], dim=-1), edge_index))
+            h = torch.tanh(self.first(torch.cat([x, per_node], dim=-1), loops))
         else:
-            h = torch.tanh(self.first(x, edge_index))
+            h = torch.tanh(self.first(x, loops))
             code = self.parser(attributes)[batch]
             h = torch.cat([h, code], dim=-1) if self.ablation == "concat_parser" else h * code  # eq. 7
-        return self.out(h, edge_index, batch)
+        return self.out(h, edge_index, batch, loops)
 
 
 SINGLE_STEP_SCALE = 2.3
