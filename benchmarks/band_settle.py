@@ -38,13 +38,10 @@ def main() -> None:
     from datagen.sim.solver import SolverConfig, SolverVBD
     from datagen.sim.state import BodyControl, ClothState
 
-    fields = {f.name: f for f in dataclasses.fields(SolverConfig)}
-    overrides = {}
-    for item in args.set:
-        name, value = item.split("=", 1)
-        kind = type(getattr(SolverConfig(), name))
-        overrides[name] = value.lower() in ("1", "true", "on") if kind is bool else kind(value)
-        assert name in fields
+    from datagen.config import load_config, parse_assignments
+
+    overrides = parse_assignments(args.set)
+    load_config(SolverConfig, overrides)  # unknown fields, wrong types and limits are refused here
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
     g = make_garment(args.garment, model, betas, seed=args.seed)

@@ -275,13 +275,10 @@ def main() -> None:
     PER_FRAME = args.per_frame
     from datagen.sim.solver import SolverConfig
 
-    defaults = SolverConfig()
-    for opt in args.drape_option:
-        key, _, value = opt.partition("=")
-        if not hasattr(defaults, key):
-            raise SystemExit(f"--drape-option {opt}: SolverConfig has no field {key!r}")
-        kind = type(getattr(defaults, key))
-        DRAPE_OPTIONS[key] = value.lower() == "true" if kind is bool else kind(float(value))
+    from datagen.config import load_config, parse_assignments
+
+    DRAPE_OPTIONS.update(parse_assignments(args.drape_option, "--drape-option"))
+    load_config(SolverConfig, DRAPE_OPTIONS)  # unknown fields, wrong types and limits are refused here
 
     import warp as wp
 

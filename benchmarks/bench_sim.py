@@ -113,16 +113,13 @@ def run(args) -> None:
 
 
 def _settings(items: list[str]) -> dict:
-    """``KEY=VALUE`` items as ``SolverConfig`` keyword arguments, each of its field's type."""
+    """``KEY=VALUE`` items as ``SolverConfig`` keyword arguments (checked by drape's config loader)."""
+    from datagen.config import load_config, parse_assignments
     from datagen.sim.solver import SolverConfig
 
-    def value(key: str, text: str):
-        default = getattr(SolverConfig(), key)  # an unknown key fails here (AttributeError)
-        if isinstance(default, bool):
-            return {"true": True, "on": True, "1": True, "false": False, "off": False, "0": False}[text.lower()]
-        return type(default)(text)
-
-    return {k: value(k, v) for k, v in (item.split("=", 1) for item in items)}
+    kw = parse_assignments(items)
+    load_config(SolverConfig, kw)
+    return kw
 
 
 PHASES = {  # kernel (or native call) -> phase of a substep

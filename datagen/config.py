@@ -55,6 +55,22 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
     return data
 
 
+def parse_assignments(items: typing.Iterable[str], option: str = "--set") -> dict[str, Any]:
+    """A command line's repeated ``KEY=VALUE`` items as a mapping for :func:`load_config`: each
+    VALUE read as a TOML value (``10``, ``0.5``, ``true``, ``[0.0, -9.81, 0.0]``), or kept as text
+    where it is none (``lagged``). The loader then checks keys, types and limits."""
+    out: dict[str, Any] = {}
+    for item in items:
+        key, sep, text = item.partition("=")
+        if not sep or not key.strip():
+            raise ConfigError(f"{option} {item!r}: expected KEY=VALUE")
+        try:
+            out[key.strip()] = tomllib.loads(f"v = {text}")["v"]
+        except tomllib.TOMLDecodeError:
+            out[key.strip()] = text
+    return out
+
+
 def load_config(cls: type[T], source: str | Path | dict[str, Any], *, section: str | None = None) -> T:
     """Build the frozen dataclass ``cls`` from a file or dict, strictly.
 

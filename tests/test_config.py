@@ -80,3 +80,20 @@ def test_section(tmp_path):
     assert load_config(Example, p, section="solver").iterations == 7
     with pytest.raises(ConfigError, match=r"missing section \[body\]"):
         load_config(Example, p, section="body")
+
+
+def test_command_line_assignments_are_read_as_toml_values_and_checked_by_the_loader():
+    from datagen.config import load_config, parse_assignments
+    from datagen.sim.solver import SolverConfig
+
+    kw = parse_assignments(["iterations=10", "chebyshev_rho=0.5", "self_collision=false", "global_friction=lagged",
+                            "gravity=[0.0, -9.81, 0.0]"])
+    assert kw == {"iterations": 10, "chebyshev_rho": 0.5, "self_collision": False, "global_friction": "lagged",
+                  "gravity": [0.0, -9.81, 0.0]}
+    assert load_config(SolverConfig, kw).iterations == 10
+    with pytest.raises(ConfigError, match="expected KEY=VALUE"):
+        parse_assignments(["iterations"])
+    with pytest.raises(ConfigError, match="iterations"):
+        load_config(SolverConfig, parse_assignments(["iterations=ten"]))
+    with pytest.raises(ConfigError, match="no_such_field"):
+        load_config(SolverConfig, parse_assignments(["no_such_field=1"]))
