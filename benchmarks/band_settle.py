@@ -30,6 +30,7 @@ def main() -> None:
 
     from datagen.body.cache import default_body
     from datagen.body.shapes import resolve_betas
+    from datagen.config import load_config, parse_assignments
     from datagen.garment.types import make_garment
     from datagen.materials import material
     from datagen.motion.library import make_motion
@@ -37,8 +38,6 @@ def main() -> None:
     from datagen.sim.model import ClothModelBuilder
     from datagen.sim.solver import SolverConfig, SolverVBD
     from datagen.sim.state import BodyControl, ClothState
-
-    from datagen.config import load_config, parse_assignments
 
     overrides = parse_assignments(args.set)
     load_config(SolverConfig, overrides)  # unknown fields, wrong types and limits are refused here

@@ -273,9 +273,8 @@ def main() -> None:
                     help="a SolverConfig field for drape's solver (e.g. body_projection=false); repeatable")
     args = ap.parse_args()
     PER_FRAME = args.per_frame
-    from datagen.sim.solver import SolverConfig
-
     from datagen.config import load_config, parse_assignments
+    from datagen.sim.solver import SolverConfig
 
     DRAPE_OPTIONS.update(parse_assignments(args.drape_option, "--drape-option"))
     load_config(SolverConfig, DRAPE_OPTIONS)  # unknown fields, wrong types and limits are refused here
