@@ -13,6 +13,7 @@ max stretch) of the last frame of scene 0.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import gc
 import pickle
 import time
@@ -167,21 +168,21 @@ def profile(args) -> None:
     print(f"device {dev} ({dev.name}); tshirt {len(d['garment'])} vertices; {args.frames} profiled frames; "
           f"{SolverConfig(**kw)}")
     for self_col, n in [(on_off[sc], int(b)) for sc in args.self.split(",") for b in args.batches.split(",")]:
-        m, solver, _metrics, a, c, ctrl, frames = _batch(d, n, str(dev), args.frames + 2,
-                                                          SolverConfig(self_collision=self_col, cuda_graph=False, **kw))
+        launched = SolverConfig(self_collision=self_col, cuda_graph=False, **kw)
+        m, solver, _metrics, a, c, ctrl, frames = _batch(d, n, str(dev), args.frames + 2, launched)
         graph_ms = float("nan")
         for _ in range(2):
             solver.step(a, c, ctrl, 1 / 30)
             a, c = c, a
         if dev.is_cuda:  # the rate as the pipeline runs it: replayed graphs
-            solver.config = SolverConfig(self_collision=self_col, cuda_graph=True, **kw)
+            solver.config = dataclasses.replace(launched, cuda_graph=True)
             a, c = _play(solver, a, c, ctrl, frames[1:3])
             wp.synchronize()
             t = time.perf_counter()
             a, c = _play(solver, a, c, ctrl, frames[3:])
             wp.synchronize()
             graph_ms = 1000 * (time.perf_counter() - t) / (len(frames) - 3)
-            solver.config = SolverConfig(self_collision=self_col, cuda_graph=False, **kw)
+            solver.config = launched
         times: dict[str, list] = {}
         wp.synchronize()
         t = time.perf_counter()
