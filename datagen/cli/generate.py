@@ -28,6 +28,10 @@ def register(sub, formatter) -> None:
                         "(default: cores - 1, at most 8; 0: none); ray: CPUs of the local Ray cluster (default: every core; "
                         "one task per GPU with --device cuda, else one per CPU)")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N)")
+    p.add_argument("--time-limit", type=float, default=None, metavar="MINUTES",
+                   help="local executor: start no batch that would not end within this many minutes (judged by the "
+                        "last batch); what is simulated stays staged, the same command continues it, and the exit "
+                        "status is 75 while the store is unfinished")
     p.add_argument("--print-config", action="store_true", help="print the resolved config and stop")
     p.set_defaults(func=_cmd_generate)
     p = sub.add_parser("validate", formatter_class=formatter, help="check a store against schemas/dataset.py",
@@ -51,6 +55,11 @@ def register(sub, formatter) -> None:
                         "give it to drape generate to make the store again)")
     p.add_argument("--plots", default=None, metavar="DIR", help="also write PNG plots into this directory")
     p.set_defaults(func=_cmd_info)
+
+
+INCOMPLETE = 75
+"""Exit status of ``drape generate --time-limit`` that stopped before the store was finished
+(EX_TEMPFAIL: run it again)."""
 
 
 def _cmd_generate(args) -> int:
@@ -107,10 +116,16 @@ def _cmd_generate(args) -> int:
 
     try:
         summary = generate(config, args.out, executor=args.executor, device=args.device, workers=args.workers,
-                           progress=progress)
+                           progress=progress, time_limit=args.time_limit)
     finally:
         for bar in bars.values():
             bar.close()
+    if not summary["complete"]:
+        print(f"time limit of {args.time_limit:g} min: simulated {summary['simulated']} scenes in "
+              f"{summary['batches']} batch(es) ({summary['seconds']:.0f} s, the simulator "
+              f"{summary['simulate_seconds']:.0f} s); {summary['left']} of {summary['samples']} scenes are left "
+              f"({summary['stopped']} batch(es)); run the same command again to continue", flush=True)
+        return INCOMPLETE
     if summary["simulated"] == 0 and summary["seconds"] == 0.0:
         print(f"{args.out} is already complete for this config: nothing to do")
     info = store_info(args.out)

@@ -35,7 +35,7 @@ __all__ = ["generate"]
 
 
 def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local", device: str | None = None,
-             workers: int | None = None, progress=None) -> dict:
+             workers: int | None = None, progress=None, time_limit: float | None = None) -> dict:
     """Make (or finish) the store ``out`` for ``config``; returns a summary dict.
 
     Args:
@@ -45,6 +45,9 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
         workers: local: processes beside the simulating one (default
             :func:`~datagen.generate.samples.default_workers`; 0: everything in this process); ray: the
             local Ray cluster's CPUs (default: every core).
+        time_limit: local executor: minutes after which no new batch is started when the last
+            batch's time per scene says it would not end in time; what was simulated stays staged
+            and the same call resumes it (``complete`` is then False). For time-limited jobs.
 
     Returns:
         ``samples``, ``simulated``, ``seconds`` (wall time), ``complete``, and for the local
@@ -55,6 +58,10 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
     """
     if executor not in ("local", "ray"):
         raise InputError(f"unknown executor {executor!r}; use local or ray")
+    if time_limit is not None and (executor != "local" or not time_limit > 0):
+        raise InputError(f"a time limit must be a positive number of minutes and needs the local executor; got "
+                         f"{time_limit} with the {executor} executor")
+    deadline = None if time_limit is None else time.perf_counter() + 60.0 * time_limit
     plan = Plan(config)
     preflight(plan, out, executor=executor, device=device, workers=workers)
     cluster = None
@@ -63,7 +70,7 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
 
         cluster = RayCluster(device, workers)
     try:
-        return _generate(plan, out, executor, device, workers, progress, cluster)
+        return _generate(plan, out, executor, device, workers, progress, cluster, deadline)
     finally:
         if cluster is not None:
             cluster.close()
@@ -137,7 +144,7 @@ def preflight(plan, out: str | Path, *, executor: str, device: str | None, worke
                          f"{disk_free / 2**30:,.1f} GiB free; free some space or give --out on a larger disk")
 
 
-def _generate(plan, out, executor, device, workers, progress, cluster) -> dict:
+def _generate(plan, out, executor, device, workers, progress, cluster, deadline=None) -> dict:
     config = plan.config
     writer = open_writer(plan, out)
     if writer.is_complete:
@@ -154,13 +161,18 @@ def _generate(plan, out, executor, device, workers, progress, cluster) -> dict:
     if executor == "local":
         workers = default_workers() if workers is None else workers
         if workers > 0 and todo:
-            stats = simulate_samples(plan, todo, device, progress=progress, out=out, workers=workers)
+            stats = simulate_samples(plan, todo, device, progress=progress, out=out, workers=workers,
+                                     deadline=deadline)
         else:
             stats = simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s),
-                                     progress=progress)
+                                     progress=progress, deadline=deadline)
     elif todo:
         ray_summary = cluster.run(config, out, todo, progress=progress)
     missing = writer.missing(range(plan.sample_count))
+    if missing and stats.get("stopped"):
+        log.info("time limit: %d of %d samples staged", plan.sample_count - len(missing), plan.sample_count)
+        return {"samples": plan.sample_count, "simulated": len(todo) - len(missing), "seconds": time.perf_counter() - t0,
+                "complete": False, "left": len(missing)} | stats
     if missing:
         raise InputError(f"{len(missing)} samples were not staged (first {missing[:5]}); run the command again to "
                          "resume")

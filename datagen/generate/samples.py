@@ -129,7 +129,7 @@ def default_workers() -> int:
 
 def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
                      on_sample: Callable[[int, dict, dict], None] | None = None, progress=None, *,
-                     out: str | Path | None = None, workers: int = 0) -> dict:
+                     out: str | Path | None = None, workers: int = 0, deadline: float | None = None) -> dict:
     """Simulate the scenes ``indices`` in batches of ``simulation.batch_size`` and stage their samples.
 
     Args:
@@ -140,10 +140,13 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
         progress: called as ``progress(done_batches, done_frames, total_frames, scenes)`` by the simulator.
         out: overlapped mode: the store the workers stage into (with ``workers > 0``).
         workers: worker processes of the overlapped mode.
+        deadline: a ``time.perf_counter()`` time: no batch is started that the last batch's time
+            per scene says would end after it (the first batch always runs); ``None``: no limit.
 
     Returns:
         timings: ``simulate_seconds`` (inside the simulator), ``garment_frames`` (recorded, ok
-        samples), ``wait_seconds`` (the simulating process waiting for workers).
+        samples), ``wait_seconds`` (the simulating process waiting for workers), ``batches`` (run),
+        ``stopped`` (batches left out at the deadline).
     """
     from datagen.sim.scene import Scene, simulate
 
@@ -151,7 +154,8 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
         raise InputError("give either on_sample (in process) or out and workers > 0 (overlapped)")
     bs = plan.config.simulation.batch_size
     batches = [list(indices[k:k + bs]) for k in range(0, len(indices), bs)]
-    stats = {"simulate_seconds": 0.0, "garment_frames": 0, "wait_seconds": 0.0, "batches": len(batches)}
+    stats = {"simulate_seconds": 0.0, "garment_frames": 0, "wait_seconds": 0.0, "batches": 0, "stopped": 0}
+    per_scene = None  # seconds a scene of the last batch took, wall time
     pool = None
     if on_sample is None:
         pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"),
@@ -162,6 +166,11 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
         if pool is not None and batches:
             garments_ready = _prefetch(pool, plan, batches[0], workers)
         for k, idx in enumerate(batches):
+            if deadline is not None and per_scene is not None and time.perf_counter() + per_scene * len(idx) > deadline:
+                stats["stopped"] = len(batches) - k
+                log.info("time limit: %d of %d batches left for the next run", len(batches) - k, len(batches))
+                break
+            started = time.perf_counter()
             batch = [plan.scenes[i] for i in idx]
             if garments_ready is not None:
                 t = time.perf_counter()
@@ -186,6 +195,8 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
                     on_sample(s.index, *sample_arrays(plan, s, o))
             del results, scenes
             pending = _collect(pending, block=False)
+            stats["batches"] += 1
+            per_scene = (time.perf_counter() - started) / len(idx)
         t = time.perf_counter()
         _collect(pending, block=True)
         stats["wait_seconds"] += time.perf_counter() - t

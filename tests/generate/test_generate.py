@@ -182,6 +182,35 @@ def test_kill_and_resume_gives_the_same_store(local_store, tmp_path):
     assert_same_store(local_store, out)
 
 
+def test_a_time_limit_stops_between_batches_and_the_same_command_finishes_the_store(local_store, tmp_path, capsys):
+    """``drape generate --time-limit``: batches of two scenes and a limit shorter than one batch.
+    The first batch always runs, then the run stops with exit status 75 and says how many scenes are
+    left; its samples stay staged; the same command finishes the store, equal to the one made in
+    one go."""
+    import json
+
+    from datagen.cli import main
+    from datagen.cli.generate import INCOMPLETE
+
+    cfg = tmp_path / "micro.json"
+    cfg.write_text(json.dumps({**MICRO, "simulation": {**MICRO["simulation"], "batch_size": 2}}))
+    out = tmp_path / "limited.zarr"
+    assert main(["generate", str(cfg), "--out", str(out), "--workers", "0", "--time-limit", "0.0001"]) == INCOMPLETE
+    said = capsys.readouterr().out
+    assert "3 of 5 scenes are left (2 batch(es))" in said and "run the same command again" in said
+    staged = [p for p in (out / "staging").iterdir() if p.name.startswith("sample-")]
+    assert len(staged) == 2
+    assert main(["generate", str(cfg), "--out", str(out), "--workers", "0"]) == 0
+    assert "simulated 3 of 5 scenes" in capsys.readouterr().out
+    assert validate(out) == []
+    assert_same_store(local_store, out)
+    with pytest.raises(InputError, match="positive number of minutes"):
+        generate(micro(), tmp_path / "x.zarr", time_limit=0)
+    with pytest.raises(InputError, match="local executor"):
+        generate(micro(), tmp_path / "y.zarr", executor="ray", time_limit=5)
+    assert not (tmp_path / "x.zarr").exists() and not (tmp_path / "y.zarr").exists()
+
+
 def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keeps_what_was_staged(tmp_path,
                                                                                                    monkeypatch):
     """One scene per batch; the device has room for the first batch only (its free memory is
