@@ -38,8 +38,16 @@ def segment_labels(store, segments: np.ndarray) -> np.ndarray:
 
 
 def _labelled(ds: SegmentDataset) -> SegmentDataset:
-    """Keep the segments with a label (paper 001 trains on labelled motions; unlabelled mocap is -1)."""
-    ds.segments = ds.segments[segment_labels(ds.store, ds.segments) >= 0]
+    """Keep the segments with a label (paper 001 trains on labelled motions; unlabelled mocap is -1),
+    each body motion once: a store simulates every motion under several garments (``paper-motion``:
+    a skirt, a T-shirt and pants), whose segments hold the same poses; counting them thrice would
+    weight the motions whose three garments all passed and make the test sets three copies."""
+    seg = ds.segments[segment_labels(ds.store, ds.segments) >= 0]
+    idx = ds.store.index
+    rows = idx["segments"][seg]
+    key = np.stack([idx["motion"][rows[:, 0]], idx["body"][rows[:, 0]], rows[:, 1]], axis=1)
+    _, first = np.unique(key, axis=0, return_index=True)
+    ds.segments = seg[np.sort(first)]
     return ds
 
 
