@@ -9,14 +9,15 @@
 #       motions per label (for the contact sheet); a clothed sample as USD + GIF
 set -o pipefail
 OUT=${OUT:-/tmp/pm-out}; STORE=${STORE:-/tmp/pm/paper-motion.zarr}; RUNS=${RUNS:-/tmp/pm/runs}
-PHASE=${PHASE:-gen}; LIMIT=${LIMIT:-8.5}
+PHASE=${PHASE:-gen}; LIMIT=${LIMIT:-8.5}; GARMENTS=${GARMENTS:-skirt tshirt pants}
+SOURCE=${CONFIG:---preset paper-motion}  # CONFIG=FILE: another dataset config
 mkdir -p "$OUT" "$(dirname "$STORE")" "$RUNS"
 D="python -m datagen.cli"
 quiet() { grep -v "^Module\|^Warp\|^   \|^ *\"cuda\|^ *\"cpu\|CUDA Toolkit\|Devices:\|Kernel cache" "$@"; }
 case "$PHASE" in
 gen)
   n=$(ls "$OUT"/generate_*.log 2>/dev/null | wc -l)
-  $D generate --preset paper-motion --out "$STORE" --device cuda --time-limit "$LIMIT" > "$OUT/generate_$n.log" 2>&1
+  $D generate $SOURCE --out "$STORE" --device cuda --time-limit "$LIMIT" > "$OUT/generate_$n.log" 2>&1
   rc=$?; echo "generate exit $rc"; quiet "$OUT/generate_$n.log" | grep -v "^scene \|it/s\]$" | tail -30
   if [ $rc -eq 0 ]; then
     $D info "$STORE" > "$OUT/info.txt" 2>&1; $D validate "$STORE" > "$OUT/validate.txt" 2>&1; echo "validate exit $?"
@@ -27,19 +28,19 @@ train)
   common="--data $STORE --device cuda --force"
   $D train motion $common --out "$RUNS/motion" --config benchmarks/configs/motion_paper.yaml > "$OUT/train_motion.log" 2>&1 &
   $D train motion $common --out "$RUNS/motion_novl" --config benchmarks/configs/motion_paper.yaml --no-vertex-loss > "$OUT/train_motion_novl.log" 2>&1 &
-  for g in skirt tshirt pants; do
+  for g in $GARMENTS; do
     $D train garment $common --garment $g --out "$RUNS/$g" --config benchmarks/configs/garment_paper.yaml > "$OUT/train_$g.log" 2>&1 &
   done
   $D train garment $common --garment skirt --zero-bos --out "$RUNS/skirt_zero_bos" --config benchmarks/configs/garment_paper.yaml > "$OUT/train_skirt_zero_bos.log" 2>&1 &
   wait
-  for r in motion motion_novl skirt tshirt pants skirt_zero_bos; do
+  for r in motion motion_novl $GARMENTS skirt_zero_bos; do
     mkdir -p "$OUT/runs/$r"; cp -r "$RUNS/$r/logs" "$RUNS/$r/run.json" "$OUT/runs/$r/" 2>/dev/null
     cp "$RUNS/$r/train_summary.json" "$OUT/runs/$r/" 2>/dev/null; echo "== $r"; tail -3 "$OUT/train_$r.log"
   done ;;
 eval)
   $D evaluate "$RUNS/motion" --split test --device cuda --json "$OUT/eval_motion.json" > "$OUT/eval_motion.log" 2>&1 &
   $D evaluate "$RUNS/motion_novl" --split test --device cuda --json "$OUT/eval_motion_novl.json" > "$OUT/eval_motion_novl.log" 2>&1 &
-  for r in skirt tshirt pants skirt_zero_bos; do
+  for r in $GARMENTS skirt_zero_bos; do
     $D evaluate "$RUNS/$r" --split test --device cuda --json "$OUT/eval_$r.json" > "$OUT/eval_$r.log" 2>&1 &
   done
   $D train refine --garment-model "$RUNS/skirt" --motion-model "$RUNS/motion" --out "$RUNS/skirt_refined" --device cuda --force > "$OUT/refine_skirt.log" 2>&1 &
