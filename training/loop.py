@@ -19,6 +19,7 @@ A run directory::
 from __future__ import annotations
 
 import json
+import logging
 import os
 import shutil
 import time
@@ -29,6 +30,8 @@ import torch
 
 from datagen.errors import InputError
 from training.config import TrainConfig
+
+log = logging.getLogger(__name__)
 
 RUN_FILE = "run.json"
 
@@ -175,9 +178,26 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
                 ckpt_path=str(out / "checkpoints" / "last.ckpt") if resume and (out / "checkpoints" / "last.ckpt").is_file()
                 else None)
     score = best.best_model_score
-    return {"best": None if score is None else float(score), "best_checkpoint": best.best_model_path,
-            "last_checkpoint": str(out / "checkpoints" / "last.ckpt"), "epochs": trainer.current_epoch,
-            "world_size": trainer.world_size, "train_samples_per_second": throughput.rates}
+    result = {"best": None if score is None else float(score), "best_checkpoint": best.best_model_path,
+              "last_checkpoint": str(out / "checkpoints" / "last.ckpt"), "epochs": trainer.current_epoch,
+              "world_size": trainer.world_size, "train_samples_per_second": throughput.rates}
+    last = trainer.callback_metrics.get(monitor)
+    if last is not None and not bool(torch.isfinite(last.detach().float()).all()):
+        # early stopping ends a run whose monitored value is NaN or infinite: say so, not "trained N epochs"
+        epoch = max(trainer.current_epoch - 1, 0)  # the last epoch run, counted from 0 as the logs count
+        result["diverged"] = {"epoch": epoch, "metric": monitor, "value": float(last)}
+        log.warning("training diverged: %s is %s at epoch %d", monitor, float(last), epoch)
+    return result
+
+
+def divergence_note(result: dict[str, Any], precision: str) -> str | None:
+    """One line for a run whose monitored validation value became NaN or infinite, else None."""
+    d = result.get("diverged")
+    if not d:
+        return None
+    return (f"warning: training diverged: {d['metric']} became {d['value']} at epoch {d['epoch']} and early stopping "
+            f"ended the run; {result['best_checkpoint'] or 'no checkpoint'} is the best epoch before that. Lower lr in "
+            f"the config" + (", or train with precision: \"32\"" if precision != "32" else "") + ", and --force a new run")
 
 
 def run_checkpoint(run: str | Path, kind: str, model: str, *, checkpoint: str = "best") -> tuple[dict, Path]:

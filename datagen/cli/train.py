@@ -144,6 +144,17 @@ def register(sub, formatter) -> None:
     p.set_defaults(func=_cmd_predict)
 
 
+def _diverged(result: dict, config) -> int:
+    """Exit status of a train command: 1 with one line when the run diverged (NaN), else 0."""
+    from training.loop import divergence_note
+
+    note = divergence_note(result, config.precision)
+    if note:
+        print(note)
+        return 1
+    return 0
+
+
 def _cmd_train_gnn(args) -> int:
     from training.config import TrainConfig
     from training.gnn.run import train_gnn
@@ -152,7 +163,7 @@ def _cmd_train_gnn(args) -> int:
     result = train_gnn(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_frames']} frames; best "
           f"validation detail error {result['best']:.2f} mm ({result['best_checkpoint']})")
-    return 0
+    return _diverged(result, config)
 
 
 def _cmd_train_motion(args) -> int:
@@ -163,7 +174,7 @@ def _cmd_train_motion(args) -> int:
     result = train_motion(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments; "
           f"best validation loss {result['best']:.4f} ({result['best_checkpoint']})")
-    return 0
+    return _diverged(result, config)
 
 
 def _cmd_train_garment(args) -> int:
@@ -175,7 +186,7 @@ def _cmd_train_garment(args) -> int:
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments of "
           f"the {config.garment} template ({result['template_vertices']} vertices); best validation loss "
           f"{result['best']:.4f} ({result['best_checkpoint']})")
-    return 0
+    return _diverged(result, config)
 
 
 def _cmd_refine(args) -> int:

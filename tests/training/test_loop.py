@@ -16,3 +16,37 @@ def test_batch_samples_counts_graphs_segments_and_rows():
     assert batch_samples(graphs) == 3
     assert batch_samples(segments) == 7
     assert batch_samples((torch.zeros(4, 2), torch.zeros(4))) == 4
+
+
+def test_a_run_whose_validation_loss_turns_nan_is_reported_as_diverged(tmp_path):
+    """Early stopping ends a run whose monitored value is NaN; the loop says so (``diverged``, and
+    one line for the train commands) instead of reporting a normal end, and keeps the best epoch."""
+    import pytorch_lightning as pl
+
+    from training.config import TrainConfig
+    from training.loop import divergence_note, fit
+
+    class Blows(pl.LightningModule):
+        def __init__(self):
+            super().__init__()
+            self.w = torch.nn.Parameter(torch.ones(1))
+
+        def training_step(self, batch, _):
+            return ((self.w * batch[0]) ** 2).mean()
+
+        def validation_step(self, batch, _):
+            loss = ((self.w * batch[0]) ** 2).mean()
+            self.log("val/loss", loss if self.current_epoch < 2 else loss * float("nan"))
+
+        def configure_optimizers(self):
+            return torch.optim.SGD(self.parameters(), lr=0.01)
+
+    data = torch.utils.data.TensorDataset(torch.ones(4, 1))
+    loader = torch.utils.data.DataLoader(data, batch_size=2)
+    result = fit(Blows(), loader, loader, TrainConfig(epochs=6, precision="32", workers=0), tmp_path, device="cpu",
+                 monitor="val/loss")
+    assert result["diverged"]["epoch"] == 2 and result["diverged"]["metric"] == "val/loss"
+    assert result["best"] is not None and result["best"] == result["best"]  # the finite best epoch is kept
+    note = divergence_note(result, "bf16-mixed")
+    assert "diverged" in note and "epoch 2" in note and "precision" in note
+    assert divergence_note({"best_checkpoint": "x"}, "32") is None
