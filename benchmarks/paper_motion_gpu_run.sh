@@ -7,6 +7,7 @@
 #       Table 9), all on the GPU at once
 #   OUT=/tmp/o PHASE=eval bash ...    Tables 3, 4, 6, 7, 9; refinement of the skirt (§3.4); sampled
 #       motions per label (for the contact sheet); a clothed sample as USD + GIF
+# Each phase writes many files into $OUT: where only a few files come back from a machine, tar $OUT.
 set -o pipefail
 OUT=${OUT:-/tmp/pm-out}; STORE=${STORE:-/tmp/pm/paper-motion.zarr}; RUNS=${RUNS:-/tmp/pm/runs}
 PHASE=${PHASE:-gen}; LIMIT=${LIMIT:-8.5}; GARMENTS=${GARMENTS:-skirt tshirt pants}
@@ -44,8 +45,8 @@ eval)
     $D evaluate "$RUNS/$r" --split test --device cuda --json "$OUT/eval_$r.json" > "$OUT/eval_$r.log" 2>&1 &
   done
   $D train refine --garment-model "$RUNS/skirt" --motion-model "$RUNS/motion" --out "$RUNS/skirt_refined" --device cuda --force > "$OUT/refine_skirt.log" 2>&1 &
-  labels=$(python -c "import json; print(' '.join(json.load(open('$RUNS/motion/run.json'))['labels']))" 2>/dev/null)
-  for l in $labels; do $D sample motion "$RUNS/motion" --label "$l" --count 4 --seed 0 --out "$OUT/samples/$l" > /dev/null 2>&1; done
+  labels=$(python -c "import json, sys; print(' '.join(json.load(open(sys.argv[1]))['labels']))" "$RUNS/motion/run.json")
+  for l in $labels; do $D sample motion "$RUNS/motion" --label "$l" --count 4 --seed 0 --out "$OUT/samples/$l" >> "$OUT/sample_motion.log" 2>&1; done
   wait
   $D evaluate "$RUNS/skirt_refined" --split test --device cuda --json "$OUT/eval_skirt_refined.json" > "$OUT/eval_skirt_refined.log" 2>&1
   $D sample clothed --motion-model "$RUNS/motion" --garment-model "$RUNS/skirt_refined" --label dance_disco --seed 0 \
