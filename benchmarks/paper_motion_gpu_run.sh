@@ -7,7 +7,8 @@
 #       Table 9), all on the GPU at once
 #   OUT=/tmp/o PHASE=eval bash ...    Tables 3, 4, 6, 7, 9; refinement of the skirt (§3.4); sampled
 #       motions per label (for the contact sheet); a clothed sample as USD + GIF
-# Each phase writes many files into $OUT: where only a few files come back from a machine, tar $OUT.
+# CONFIG=benchmarks/configs/paper_motion_coarse.yaml GARMENTS='skirt pants' (all phases): the coarse store that
+# one command makes (docs/training.md's runs). Each phase writes many files into $OUT: where only a few files come back from a machine, tar $OUT.
 set -o pipefail
 OUT=${OUT:-/tmp/pm-out}; STORE=${STORE:-/tmp/pm/paper-motion.zarr}; RUNS=${RUNS:-/tmp/pm/runs}
 PHASE=${PHASE:-gen}; LIMIT=${LIMIT:-8.5}; GARMENTS=${GARMENTS:-skirt tshirt pants}
