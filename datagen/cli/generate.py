@@ -18,7 +18,9 @@ def register(sub, formatter) -> None:
                        "refused.",
                        epilog="examples:\n  drape generate --out tiny.zarr                 (the tiny preset)\n"
                        "  drape generate my.toml --out my.zarr --device cuda\n"
-                       "  drape generate --preset paper-gnn --out gnn.zarr --executor ray --device cuda")
+                       "  drape generate --preset paper-gnn --out gnn.zarr --executor ray --device cuda\n"
+                       "  drape generate --preset paper-motion --out motion.zarr --device cuda --time-limit 50   "
+                       "(again until it exits 0)")
     p.add_argument("config", nargs="?", default=None, help="dataset config (.toml/.yaml); default: --preset tiny")
     p.add_argument("--preset", default=None, help="tiny (default), small, paper-gnn, paper-motion")
     p.add_argument("--out", required=True, help="the store directory")
