@@ -30,20 +30,26 @@ def prepare(args) -> None:
 
     model = default_body()
     betas = resolve_betas(model, body="regular")[0]
-    g = make_garment("tshirt", model, betas, seed=0, target_edge_length=args.edge)
-    motion, _lead = make_motion("walk", seed=0, frames=args.frames).with_lead_in(args.lead_in)
+    g = make_garment(args.garment, model, betas, seed=0, target_edge_length=args.edge)
+    motion, _lead = make_motion(args.motion, seed=0, frames=args.frames).with_lead_in(args.lead_in)
     poses = motion.poses.reshape(motion.frame_count, -1)
     verts, _ = model.pose(np.repeat(betas[None], motion.frame_count, 0), poses, motion.trans)
     shift = (verts[0] - np.asarray(model.shaped(betas[None]))[0]).mean(0)
     np.savez_compressed(args.out, garment=g.vertices + shift, faces=g.faces, frames=g.material_frames(),
                         material=g.material.name, body=verts.astype(np.float32), body_faces=model.faces,
-                        body_face_part=face_parts(model.weights, model.faces))
-    print(f"wrote {args.out}: tshirt {g.vertex_count} vertices, body {verts.shape[1]} vertices x {len(verts)} frames")
+                        body_face_part=face_parts(model.weights, model.faces), kind=args.garment, motion=args.motion)
+    print(f"wrote {args.out}: {args.garment} {g.vertex_count} vertices, body {verts.shape[1]} vertices x {len(verts)} "
+          f"frames of {args.motion}")
+
+
+def _scene_name(d) -> str:
+    """``garment/motion`` of prepared inputs (those prepared before the names were kept: the T-shirt walking)."""
+    return f"{d['kind'] if 'kind' in d else 'tshirt'}/{d['motion'] if 'motion' in d else 'walk'}"
 
 
 def _batch(d, n: int, device: str, frames: int, config):
-    """``n`` copies of the prepared T-shirt scene as one model: (model, solver, metrics, state a,
-    state c, control, the body's frames tiled per scene)."""
+    """``n`` copies of the prepared scene (the T-shirt walking unless prepared otherwise) as one
+    model: (model, solver, metrics, state a, state c, control, the body's frames tiled per scene)."""
     from datagen.sim.metrics import Metrics
     from datagen.sim.model import ClothModelBuilder
     from datagen.sim.solver import SolverVBD
@@ -80,7 +86,7 @@ def run(args) -> None:
     body = d["body"]
     wp.init()
     dev = wp.get_device(args.device)
-    print(f"device {dev} ({dev.name}); tshirt {len(d['garment'])} vertices, {len(d['faces'])} faces; body "
+    print(f"device {dev} ({dev.name}); {_scene_name(d)} {len(d['garment'])} vertices, {len(d['faces'])} faces; body "
           f"{body.shape[1]} vertices; {min(args.frames, len(body) - 1)} timed frames at 30 fps, {SolverConfig().substeps} substeps x "
           f"{SolverConfig().iterations} iterations")
     print(f"{'batch':>5} {'self':>5} {'graph':>5} {'ms/frame':>9} {'garment-frames/s':>17} {'MB/scene':>9} {'pen':>5} {'self-x':>6} "
@@ -165,7 +171,7 @@ def profile(args) -> None:
     dev = wp.get_device(args.device)
     on_off = {"on": True, "off": False}
     kw = _settings(args.set)
-    print(f"device {dev} ({dev.name}); tshirt {len(d['garment'])} vertices; {args.frames} profiled frames; "
+    print(f"device {dev} ({dev.name}); {_scene_name(d)} {len(d['garment'])} vertices; {args.frames} profiled frames; "
           f"{SolverConfig(**kw)}")
     for self_col, n in [(on_off[sc], int(b)) for sc in args.self.split(",") for b in args.batches.split(",")]:
         launched = SolverConfig(self_collision=self_col, cuda_graph=False, **kw)
@@ -310,7 +316,9 @@ def main() -> None:
     p.add_argument("--out", default="sim_inputs.npz")
     p.add_argument("--frames", type=int, default=30)
     p.add_argument("--edge", type=float, default=0.016, help="garment edge length (m): 0.016 gives about 4,000 vertices")
-    p.add_argument("--lead-in", type=float, default=0.3, help="seconds from the rest pose to the walk's first pose")
+    p.add_argument("--lead-in", type=float, default=0.3, help="seconds from the rest pose to the motion's first pose")
+    p.add_argument("--garment", default="tshirt", help="garment type (seed 0, on the regular body)")
+    p.add_argument("--motion", default="walk", help="motion label (seed 0)")
     p.set_defaults(func=prepare)
     p = sub.add_parser("run")
     p.add_argument("--inputs", default="sim_inputs.npz")
