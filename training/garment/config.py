@@ -22,7 +22,10 @@ class GarmentConfig:
         lr, lr_factor, lr_patience: Adam's rate, times ``lr_factor`` when the validation loss has
             not fallen for ``lr_patience`` epochs (paper: 1e-3, 0.1, 30).
         early_stop_patience: stop when the validation loss has not fallen for this many epochs.
-        workers, precision: as for the other models.
+        workers: as for the other models.
+        precision: Lightning's precision, 32-bit by default: with the learned BOS, bf16 mixed precision
+            on CUDA stalls at a high loss and turns NaN within a few hundred steps while the same run
+            in float32 (or with a zero BOS in bf16) trains (measured on an H200, docs/training.md).
         d_model, heads, layers, feedforward, dropout: the Transformers (paper: 256, 4, M = 2, 512, 0.1).
         bos: ``learned`` (the MLP on the mean pose, pretrained then frozen) or ``zero`` (Table 9).
         bos_hidden: the BOS MLP's hidden widths (paper: 1024 and 4096).
@@ -44,7 +47,7 @@ class GarmentConfig:
     lr_patience: int = field(default=30, metadata={"min": 1, "max": 100000})
     early_stop_patience: int = field(default=200, metadata={"min": 1, "max": 100000})
     workers: int = field(default=0, metadata={"min": 0, "max": 64})
-    precision: str = field(default="auto", metadata={"choices": ("auto", "32", "bf16-mixed", "16-mixed")})
+    precision: str = field(default="32", metadata={"choices": ("auto", "32", "bf16-mixed", "16-mixed")})
     d_model: int = field(default=256, metadata={"min": 8, "max": 4096})
     heads: int = field(default=4, metadata={"min": 1, "max": 64})
     layers: int = field(default=2, metadata={"min": 1, "max": 64})
