@@ -271,14 +271,15 @@ def run_scenes(args) -> None:
         d = pickle.load(fh)
     scenes, names = d["scenes"], d["names"]
     lead_in = RunConfig().lead_in if args.lead_in is None else args.lead_in
-    config = RunConfig(lead_in=lead_in, solver=SolverConfig(self_collision=not args.no_self_collision,
-                                                            body_projection=not args.no_projection,
-                                                            body_friction=not args.no_body_friction,
-                                                            **({} if args.friction_pressure is None else
-                                                               {"friction_pressure": args.friction_pressure}),
-                                                            **({} if args.global_iterations is None else
-                                                               {"global_iterations": args.global_iterations}),
-                                                            **_settings(args.set)))
+    config = RunConfig(lead_in=lead_in, freeze_failed=args.freeze_failed,
+                       solver=SolverConfig(self_collision=not args.no_self_collision,
+                                           body_projection=not args.no_projection,
+                                           body_friction=not args.no_body_friction,
+                                           **({} if args.friction_pressure is None else
+                                              {"friction_pressure": args.friction_pressure}),
+                                           **({} if args.global_iterations is None else
+                                              {"global_iterations": args.global_iterations}),
+                                           **_settings(args.set)))
     print(f"{len(scenes)} scenes in one batch, device {args.device}, {config}", flush=True)
     t0 = time.perf_counter()
 
@@ -354,6 +355,9 @@ def main() -> None:
     p.add_argument("--no-projection", action="store_true", help="turn the end-of-substep body projection off")
     p.add_argument("--no-body-friction", action="store_true", help="turn friction with the body off (diagnosis)")
     p.add_argument("--lead-in", type=float, default=None, help="seconds (default: RunConfig's)")
+    p.add_argument("--freeze-failed", action="store_true",
+                   help="stop simulating a scene once it fails, as drape generate does (default here: run every "
+                        "scene to the end, so a failed scene's later metrics are reported as before)")
     p.add_argument("--friction-pressure", type=float, default=None, help="Pa (default: SolverConfig's)")
     p.add_argument("--global-iterations", type=int, default=None,
                    help="conjugate-gradient iterations of the global step (default: SolverConfig's; 0: sweeps alone)")

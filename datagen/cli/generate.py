@@ -141,11 +141,14 @@ def _cmd_generate(args) -> int:
     elif summary["seconds"] > 0:
         print(f"simulated {summary['simulated']} scenes in {summary['seconds']:.0f} s; {frames} garment-frames stored, "
               f"{frames / summary['seconds']:.2f} garment-frames/s end to end")
-        if summary.get("simulate_seconds"):
+        if summary.get("simulate_seconds") and summary.get("simulator_garment_frames_per_second"):
             print(f"the simulator alone: {summary['simulator_garment_frames_per_second']:.2f} garment-frames/s "
                   f"({summary['simulate_seconds']:.0f} s in {summary['batches']} batch(es)); end to end is "
                   f"{summary['garment_frames_per_second'] / summary['simulator_garment_frames_per_second']:.2f}x "
                   f"that; the simulating process waited {summary['wait_seconds']:.1f} s for the workers")
+        elif summary.get("simulate_seconds"):  # every scene failed: nothing recorded to give a rate of
+            print(f"the simulator ran {summary['simulate_seconds']:.0f} s in {summary['batches']} batch(es) and every "
+                  "scene failed, so no garment-frame was stored (drape info lists why)")
         for t in summary.get("tasks", []):
             where = (f"GPU {t['gpus']} (CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']})" if t["gpus"]
                      else f"CPU (pid {t['pid']})")

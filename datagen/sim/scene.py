@@ -50,6 +50,11 @@ class RunConfig:
         ramp: seconds over which the motion starts from standstill (not recorded).
         solver: the solver's settings.
         thresholds: what makes a scene fail.
+        freeze_failed: stop simulating a scene from the frame it fails (its vertices held where they
+            are): a failed scene's frames are not stored, and a tangled scene is the most expensive
+            kind. Its later metrics then describe the frozen cloth; its failure and failure frame do
+            not change, nor does any other scene of the batch. False: simulate it to the end
+            (diagnosis: what a failed scene goes on to do).
     """
 
     settle_rest: int = field(default=15, metadata={"min": 1, "max": 1000})
@@ -58,6 +63,7 @@ class RunConfig:
     ramp: float = field(default=1.0, metadata={"min": 0.0, "max": 10.0})
     solver: SolverConfig = field(default_factory=SolverConfig)
     thresholds: FailureThresholds = field(default_factory=FailureThresholds)
+    freeze_failed: bool = True
 
     def __post_init__(self):
         if self.settle_rest < 1 or self.settle_pose < 0 or self.lead_in < 0 or self.ramp < 0:
@@ -436,6 +442,8 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                 if why:
                     failure[s], failure_frame[s] = why, f
                     log.warning("scene %d failed at frame %d: %s", s, f, why)
+                    if config.freeze_failed:
+                        solver.freeze(state_a, np.flatnonzero(model.host.particle_scene == s))
         if f >= recorded_from:
             positions.append(state_a.positions.numpy().copy())  # on the CPU .numpy() is a view of the buffer
         if progress:

@@ -255,6 +255,25 @@ class SolverVBD:
             self.tv_vert = wp.zeros((m.face_count, cap), dtype=wp.int32)
             self.ee_edge = wp.zeros((m.edge_count, cap), dtype=wp.int32)
 
+    def freeze(self, state, vertices) -> None:
+        """Stop simulating ``vertices`` (the vertices of a scene that failed): from the next step they
+        are inactive like pinned vertices, held where ``state`` has them, at rest. The sweeps, the
+        global step, the body contact and projection and the vertex-triangle queries skip them; the
+        other scenes of the batch are unchanged (a scene never reads another's vertices)."""
+        idx = np.asarray(vertices, dtype=np.int64)
+        if not len(idx):
+            return
+        active = self.model.active.numpy().copy()
+        active[idx] = 0
+        self.model.active.assign(active)
+        x = state.positions.numpy()
+        target = state.pinned_target.numpy().copy()
+        target[idx] = x[idx]
+        state.pinned_target.assign(target)
+        v = state.velocities.numpy().copy()
+        v[idx] = 0.0
+        state.velocities.assign(v)
+
     def reset_body(self, control) -> None:
         """Take ``control`` as the body's pose at the start of the next step (no motion in between)."""
         self.body_start.assign(control.body_vertices)

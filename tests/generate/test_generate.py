@@ -211,6 +211,24 @@ def test_a_time_limit_stops_between_batches_and_the_same_command_finishes_the_st
     assert not (tmp_path / "x.zarr").exists() and not (tmp_path / "y.zarr").exists()
 
 
+def test_a_store_whose_every_scene_failed_is_finished_and_says_so(tmp_path, capsys):
+    """A stretch limit no cloth meets (0.1 %): every scene fails at its first frame and is frozen
+    there; the store is still finished and valid (the failures, their reasons and frames), and the
+    command says that nothing was stored instead of dividing by a rate of zero (it did)."""
+    import json
+
+    from datagen.cli import main
+
+    cfg = tmp_path / "failing.json"
+    cfg.write_text(json.dumps({**MICRO, "simulation": {**MICRO["simulation"], "thresholds": {"stretch": 0.001}}}))
+    out = tmp_path / "failing.zarr"
+    assert main(["generate", str(cfg), "--out", str(out), "--workers", "0"]) == 0
+    assert "every scene failed, so no garment-frame was stored" in capsys.readouterr().out
+    assert validate(out) == []
+    store = open_store(out)
+    assert np.all(store.index["failure"] > 0) and np.all(store.index["failure_frame"] == 0)
+
+
 def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keeps_what_was_staged(tmp_path,
                                                                                                    monkeypatch):
     """One scene per batch; the device has room for the first batch only (its free memory is

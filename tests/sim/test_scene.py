@@ -68,3 +68,35 @@ def test_phases_count_the_frames_the_schedule_simulates():
         schedule, first = frame_schedule(rc, lead, lead + rc.motion_frames(recorded, fps), fps)
         phases = rc.phases(recorded, fps)
         assert sum(phases.values()) == len(schedule) and first == len(schedule) - recorded, (phases, len(schedule))
+
+
+def test_a_failed_scene_is_frozen_and_the_other_scenes_do_not_change(monkeypatch):
+    """``RunConfig.freeze_failed``: from the frame a scene fails it is no longer simulated, its
+    vertices held where they were (here a falling patch made to fail at its fourth frame stops in
+    mid-air); another scene of the batch gives bitwise the positions it gives when the failed scene
+    runs to the end; the failure and its frame are the same either way."""
+    from datagen.sim.metrics import Failure, Metrics
+
+    calls = {"n": 0}
+
+    def fail_scene_1_at_frame_3(self, frame, scene, thresholds):
+        if scene != 1:
+            return None
+        calls["n"] += 1
+        return Failure("stretch", "made to fail by the test") if calls["n"] >= 4 else None
+
+    monkeypatch.setattr(Metrics, "failure", fail_scene_1_at_frame_3)
+    runs = {}
+    for freeze in (True, False):
+        calls["n"] = 0
+        config = RunConfig(settle_rest=1, lead_in=0.0, settle_pose=0, ramp=0.0, freeze_failed=freeze)
+        runs[freeze] = simulate([falling_patch(), falling_patch(n=7)], config, device="cpu")
+    frozen, free = runs[True], runs[False]
+    assert frozen[1].failure_frame == free[1].failure_frame == 3 and frozen[1].failure.code == "stretch"
+    assert frozen[0].failure is None and np.array_equal(frozen[0].positions, free[0].positions)
+    k = frozen[1].failure_frame - frozen[1].recorded_from  # the recorded frame where it failed
+    after = frozen[1].positions[k:]
+    assert len(after) >= 3 and all(np.array_equal(p, after[0]) for p in after)
+    assert np.array_equal(frozen[1].positions[:k + 1], free[1].positions[:k + 1])  # the same until it failed
+    heights = free[1].positions[k:, :, 1].mean(axis=1)  # run to the end, it keeps falling
+    assert np.all(np.diff(heights) < -1e-4)
