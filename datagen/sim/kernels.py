@@ -430,18 +430,21 @@ def detect_vertex_triangle(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest
 def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.array(dtype=wp.vec3),
                      scene: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                      nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32), query: float,
-                     contact_radius: float, ee_count: wp.array(dtype=wp.int32), ee_edge: wp.array2d(dtype=wp.int32),
-                     min_dist: wp.array(dtype=float)):
+                     contact_radius: float, frozen: wp.array(dtype=wp.int32), ee_count: wp.array(dtype=wp.int32),
+                     ee_edge: wp.array2d(dtype=wp.int32), min_dist: wp.array(dtype=float)):
     """Edge-edge pairs of the cloth closer than ``contact_radius``, stored in both edges' lists
     (``ee_count`` must start at zero; the rows are sorted afterwards); edges next to each other are
     treated as in :func:`detect_vertex_triangle`.
 
     Each pair is measured once, by the thread of its lower edge: the search box of either edge,
-    grown by ``query``, finds the other, so the higher edge's thread skips it.
+    grown by ``query``, finds the other, so the higher edge's thread skips it. Scenes that are
+    ``frozen`` (failed, no longer simulated) are not searched.
     """
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
+    if frozen[scene[a]] != 0:
+        return
     pa = x[a]
     pb = x[b]
     lo = wp.min(pa, pb) - wp.vec3(query)

@@ -443,7 +443,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                     failure[s], failure_frame[s] = why, f
                     log.warning("scene %d failed at frame %d: %s", s, f, why)
                     if config.freeze_failed:
-                        solver.freeze(state_a, np.flatnonzero(model.host.particle_scene == s))
+                        solver.freeze(state_a, s)
         if f >= recorded_from:
             positions.append(state_a.positions.numpy().copy())  # on the CPU .numpy() is a view of the buffer
         if progress:

@@ -172,6 +172,7 @@ class SolverVBD:
             self.friction_used = wp.zeros(n, dtype=float)
             self.slip = wp.zeros(n, dtype=float)
             self.v_old = z3(n)
+            self.scene_frozen = wp.zeros(m.scene_count, dtype=wp.int32)  # 1: frozen (:meth:`freeze`)
             if self.config.global_iterations:  # the global step's vectors, blocks and per-scene scalars
                 self.cg_force, self.cg_r, self.cg_z, self.cg_p, self.cg_q, self.cg_d = (z3(n) for _ in range(6))
                 self.cg_diag_other, self.cg_diag_el, self.cg_inverse = (wp.zeros(n, dtype=wp.mat33) for _ in range(3))
@@ -255,14 +256,18 @@ class SolverVBD:
             self.tv_vert = wp.zeros((m.face_count, cap), dtype=wp.int32)
             self.ee_edge = wp.zeros((m.edge_count, cap), dtype=wp.int32)
 
-    def freeze(self, state, vertices) -> None:
-        """Stop simulating ``vertices`` (the vertices of a scene that failed): from the next step they
-        are inactive like pinned vertices, held where ``state`` has them, at rest. The sweeps, the
-        global step, the body contact and projection and the vertex-triangle queries skip them; the
-        other scenes of the batch are unchanged (a scene never reads another's vertices)."""
-        idx = np.asarray(vertices, dtype=np.int64)
+    def freeze(self, state, scene: int) -> None:
+        """Stop simulating scene ``scene`` (one that failed): from the next step its vertices are
+        inactive like pinned vertices, held where ``state`` has them, at rest, and its cloth-cloth
+        contacts are no longer looked for. The sweeps, the global step, the body contact and
+        projection and the detection skip it; the other scenes of the batch are unchanged (a scene
+        never reads another's vertices)."""
+        idx = np.flatnonzero(self.model.host.particle_scene == scene)
         if not len(idx):
             return
+        frozen = self.scene_frozen.numpy().copy()
+        frozen[scene] = 1
+        self.scene_frozen.assign(frozen)
         active = self.model.active.numpy().copy()
         active[idx] = 0
         self.model.active.assign(active)
@@ -390,8 +395,8 @@ class SolverVBD:
                               self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
             wp.launch(K.detect_edge_edge, ne,
                       inputs=[self.edge_bvh.id, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
-                              m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.ee_count,
-                              self.ee_edge, self.min_dist])
+                              m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.scene_frozen,
+                              self.ee_count, self.ee_edge, self.min_dist])
             wp.launch(K.sort_lists, n, inputs=[self.vt_count, self.vt_tri])
             wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
             wp.launch(K.sort_lists, ne, inputs=[self.ee_count, self.ee_edge])
