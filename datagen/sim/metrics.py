@@ -20,7 +20,7 @@ import numpy as np
 import warp as wp
 
 from datagen.geometry.queries import signed_distance
-from datagen.sim.kernels import face_bounds
+from datagen.sim.detection_kernels import face_bounds
 
 METRIC_NAMES = ("stretch_max", "stretch_mean", "penetration_count", "penetration_depth", "self_intersections",
                 "kinetic_energy", "nan", "slip")

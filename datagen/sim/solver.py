@@ -156,11 +156,12 @@ class SolverVBD:
     def __init__(self, model, config: SolverConfig | None = None):
         import warp as wp
 
+        from datagen.sim import detection_kernels as D
         from datagen.sim import kernels as K
 
         self.model = model
         self.config = config or SolverConfig()
-        self.K = K
+        self.K, self.D = K, D
         m = model
         n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
         with wp.ScopedDevice(m.device):
@@ -196,9 +197,9 @@ class SolverVBD:
             self.body_prev_sub, self.body_sub = z3(nb), wp.clone(m.body_rest)
             self.x_det = wp.clone(m.rest_positions)
             self.edge_lo, self.edge_hi = z3(ne), z3(ne)
-            wp.launch(K.edge_bounds, ne, inputs=[m.rest_positions, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
+            wp.launch(D.edge_bounds, ne, inputs=[m.rest_positions, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
             self.face_lo, self.face_hi = z3(nf), z3(nf)
-            wp.launch(K.face_bounds, nf, inputs=[m.rest_positions, m.faces, self.face_lo, self.face_hi])
+            wp.launch(D.face_bounds, nf, inputs=[m.rest_positions, m.faces, self.face_lo, self.face_hi])
             # one body mesh per scene over views of the flat arrays (its closest-point and winding
             # queries have no group root in warp 1.19); the cloth's faces and edges are each one BVH
             # with a group per scene: one refit per detection for the whole batch, queries start at
@@ -360,6 +361,7 @@ class SolverVBD:
             if len(graphs) > 8:
                 graphs.clear()
             wp.load_module(self.K, device=dev)  # compile before capturing
+            wp.load_module(self.D, device=dev)
             if self.config.global_iterations:
                 from datagen.sim import newton_kernels
 
@@ -377,33 +379,33 @@ class SolverVBD:
         """Cloth-cloth pairs and every vertex's move bound at the positions ``x_det``."""
         import warp as wp
 
-        K, m, c = self.K, self.model, self.config
+        D, m, c = self.D, self.model, self.config
         n, nf, ne = m.particle_count, m.face_count, m.edge_count
-        self.min_dist.fill_(K.BIG)
+        self.min_dist.fill_(D.BIG)
         self.vt_count.zero_()
         self.tv_count.zero_()
         self.ee_count.zero_()
         if c.self_collision:
             xd = self.x_det
-            wp.launch(K.face_bounds, nf, inputs=[xd, m.faces, self.face_lo, self.face_hi])
+            wp.launch(D.face_bounds, nf, inputs=[xd, m.faces, self.face_lo, self.face_hi])
             self.face_bvh.refit()
-            wp.launch(K.edge_bounds, ne, inputs=[xd, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
+            wp.launch(D.edge_bounds, ne, inputs=[xd, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
             self.edge_bvh.refit()
-            wp.launch(K.detect_vertex_triangle, n,
+            wp.launch(D.detect_vertex_triangle, n,
                       inputs=[self.face_bvh.id, xd, m.rest_positions, m.particle_scene, m.faces,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
                               self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
-            wp.launch(K.detect_edge_edge, ne,
+            wp.launch(D.detect_edge_edge, ne,
                       inputs=[self.edge_bvh.id, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.scene_frozen,
                               self.ee_count, self.ee_edge, self.min_dist])
-            wp.launch(K.sort_lists, n, inputs=[self.vt_count, self.vt_tri])
-            wp.launch(K.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
-            wp.launch(K.sort_lists, ne, inputs=[self.ee_count, self.ee_edge])
-            wp.launch(K.count_needed, n, inputs=[self.vt_count, self.needed, 0])
-            wp.launch(K.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
-            wp.launch(K.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
-        wp.launch(K.finish_bounds, n, inputs=[self.min_dist, c.bound_fraction, c.self_bound_floor, self.bound])
+            wp.launch(D.sort_lists, n, inputs=[self.vt_count, self.vt_tri])
+            wp.launch(D.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
+            wp.launch(D.sort_lists, ne, inputs=[self.ee_count, self.ee_edge])
+            wp.launch(D.count_needed, n, inputs=[self.vt_count, self.needed, 0])
+            wp.launch(D.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
+            wp.launch(D.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
+        wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.bound_fraction, c.self_bound_floor, self.bound])
 
     def _global_step(self, x, h: float) -> None:
         """One Newton step of the substep's incremental potential from the initial guess ``x``,
