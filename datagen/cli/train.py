@@ -65,6 +65,9 @@ def register(sub, formatter) -> None:
     f.add_argument("--seed", type=int, default=0)
     f.add_argument("--device", default="auto")
     f.add_argument("--force", action="store_true", help="replace the run in --out")
+    f.add_argument("--latent", default="posterior", choices=("posterior", "prior"),
+                   help="where Z is drawn from: posterior (default), each label's Gaussian fitted to the training "
+                        "posteriors; prior, N(0, I) as paper 001 (docs/training.md measures both)")
     f.set_defaults(func=_cmd_refine)
     r = models.add_parser("garment", formatter_class=formatter, help="paper 001's garment regressor (one template)",
                           description="Train paper 001's dynamic garment regressor (§3.3) for one garment type's "
@@ -92,6 +95,9 @@ def register(sub, formatter) -> None:
                    help="frames per motion (default: the segment length it was trained on). `drape generate` "
                         "with file: motions needs the recorded frames plus the ramp (e.g. 75 for 60 recorded)")
     s.add_argument("--device", default="cpu", help="cpu, cuda or auto")
+    s.add_argument("--latent", default="posterior", choices=("posterior", "prior"),
+                   help="where Z is drawn from: posterior (default), each label's Gaussian fitted to the training "
+                        "posteriors; prior, N(0, I) as paper 001 (docs/training.md measures both)")
     s.set_defaults(func=_cmd_sample_motion)
     c = samplers.add_parser("clothed", formatter_class=formatter, help="a body animation dressed by the regressor",
                             description="Paper 001's application: a new motion from the motion generator (or a "
@@ -111,6 +117,9 @@ def register(sub, formatter) -> None:
     c.add_argument("--device", default="cpu", help="cpu, cuda or auto")
     c.add_argument("--no-push-out", action="store_true",
                    help="keep garment vertices that end inside the body (no post-process)")
+    c.add_argument("--latent", default="posterior", choices=("posterior", "prior"),
+                   help="where Z is drawn from: posterior (default), each label's Gaussian fitted to the training "
+                        "posteriors; prior, N(0, I) as paper 001 (docs/training.md measures both)")
     c.set_defaults(func=_cmd_sample_clothed)
 
     p = sub.add_parser("evaluate", formatter_class=formatter, help="a trained model's errors on a split",
@@ -197,7 +206,7 @@ def _cmd_refine(args) -> int:
 
         raise InputError(f"--seed must be 0 or more, got {args.seed}")
     r = refine_garment(args.garment_model, args.motion_model, args.out, samples=args.samples, steps=args.steps,
-                       seed=args.seed, device=args.device, force=args.force)
+                       seed=args.seed, device=args.device, force=args.force, latent=args.latent)
     print(f"refined {args.garment_model} into {args.out}: {r['steps']} steps on {r['sampled'] - r['dropped']} sampled "
           f"motions ({r['dropped']} dropped for heavy interpenetration), loss {r['loss_first']:.4f} -> "
           f"{r['loss_last']:.4f}; garment vertices inside the body on {r['held_out']} held-out sampled motions: "
@@ -212,7 +221,7 @@ def _cmd_sample_motion(args) -> int:
 
     t0 = time.perf_counter()
     paths = sample_motions(args.run, args.label, args.count, args.seed, args.out, device=args.device,
-                           frames=args.frames)
+                           frames=args.frames, latent=args.latent)
     print(f"wrote {len(paths)} {args.label} motions into {args.out} ({time.perf_counter() - t0:.1f} s): "
           f"{paths[0].name} .. {paths[-1].name}; e.g. drape motion export {paths[0]} --format bvh --out "
           f"{paths[0].with_suffix('.bvh')}")
@@ -239,7 +248,8 @@ def _cmd_sample_clothed(args) -> int:
         raise InputError(f"--seed must be 0 or more, got {args.seed}")
     t0 = time.perf_counter()
     d = dress_motion(args.garment_model, motion_run=args.motion_model, label=args.label, motion_file=args.motion,
-                     seed=args.seed, device=args.device, push_out_margin=None if args.no_push_out else 0.002)
+                     seed=args.seed, device=args.device, push_out_margin=None if args.no_push_out else 0.002,
+                     latent=args.latent)
     anim = Animation(body_vertices=d["body_vertices"].astype("float32"), body_faces=d["body_faces"],
                      garment_vertices=d["garment_vertices"].astype("float32"), garment_faces=d["garment_faces"],
                      fps=d["fps"], title=f"{d['label']}, {d['garment']} (paper 001's models)",

@@ -73,9 +73,49 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
     for part in ("generated", "real"):
         assert np.isfinite(g[part]["fid"]["mean"]) and g[part]["fid"]["mean"] >= -1e-6
         assert 0 <= g[part]["accuracy"]["mean"] <= 1 and g[part]["diversity"]["mean"] >= 0
+    gp = e["generation_posterior"]
+    assert gp["latent"] == "posterior" and g["latent"] == "prior" and gp["real"] == g["real"]
+    assert np.isfinite(gp["generated"]["fid"]["mean"])
     assert main(["evaluate", str(run), "--split", "test", "--device", "cpu", "--repetitions", "2"]) == 0
     out = capsys.readouterr().out
-    assert "label's mean pose" in out and "generated" in out and "multimodality" in out
+    assert "label's mean pose" in out and "generated, prior" in out and "generated, posterior" in out
+    assert "multimodality" in out
+
+
+def test_the_posterior_latent_is_each_labels_gaussian_over_the_training_posteriors(motion_run, tmp_path):
+    """The per-label fit equals its definition on the training segments' (μ, σ²), is cached beside
+    the checkpoint, and samples drawn from it are reproducible and differ from the prior's."""
+    from training.motion.module import pose_features
+    from training.motion.run import _segments, label_latents, load_motion, sample_sequences
+
+    run, _ = motion_run
+    loaded = load_motion(run)
+    module, meta, ckpt, store = loaded
+    mean, std = label_latents(loaded, "posterior")
+    assert label_latents(loaded, "prior") is None
+    cache = ckpt.with_name(ckpt.name + ".latents.npz")
+    assert cache.is_file()
+    batch = next(iter(torch.utils.data.DataLoader(_segments(store, "train"), batch_size=10_000)))
+    x, _ = pose_features(batch)
+    label = batch["label"][:, 0].long()
+    with torch.no_grad():
+        mu, logvar = module.model.encode(x, label)
+    for lab in range(len(meta["labels"])):
+        rows = label == lab
+        if not rows.any():
+            assert torch.equal(mean[lab], torch.zeros_like(mean[lab])) and torch.equal(std[lab], torch.ones_like(std[lab]))
+            continue
+        m = mu[rows].double()
+        want_std = (m.var(0, unbiased=False) + logvar[rows].double().exp().mean(0)).sqrt()
+        assert torch.allclose(mean[lab].double(), m.mean(0), atol=1e-5)
+        assert torch.allclose(std[lab].double(), want_std, rtol=1e-4, atol=1e-6)
+    again = label_latents(loaded, "posterior")  # from the cache: the same numbers
+    assert torch.equal(again[0], mean) and torch.equal(again[1], std)
+    a = sample_sequences(loaded, "walk", 2, 3)[0]
+    assert np.array_equal(a, sample_sequences(loaded, "walk", 2, 3)[0])
+    assert not np.allclose(a, sample_sequences(loaded, "walk", 2, 3, latent="prior")[0])
+    with pytest.raises(InputError, match="--latent must be one of posterior, prior"):
+        sample_sequences(loaded, "walk", 2, 3, latent="uniform")
 
 
 def test_generation_metrics_on_known_features():

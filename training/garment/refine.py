@@ -29,8 +29,8 @@ from training.garment.contact import body_contact, collision_loss, inside_share
 
 def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | Path, *, samples: int = 64,
                    steps: int = 200, seed: int = 0, drop_share: float = 0.2, keep_weight: float = 1.0,
-                   margin: float = 0.002, lr: float | None = None, device: str = "auto", force: bool = False
-                   ) -> dict[str, Any]:
+                   margin: float = 0.002, lr: float | None = None, device: str = "auto", force: bool = False,
+                   latent: str = "posterior") -> dict[str, Any]:
     """Fine-tune a garment regressor with eq. 4 on sampled motions (see the module docstring) and
     write it as the run ``out``; returns the share of vertices inside the body before and after on
     a second, held-out set of sampled motions, and the fine-tuning losses."""
@@ -66,7 +66,8 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     def sample_set(n: int, base_seed: int):
         sets = []
         for k in range(n):
-            poses, trans, _ = sample_sequences(motion, str(rng.choice(choices)), 1, base_seed + k, device=device)
+            poses, trans, _ = sample_sequences(motion, str(rng.choice(choices)), 1, base_seed + k, device=device,
+                                               latent=latent)
             p = torch.as_tensor(poses[0], dtype=torch.float32, device=dev)
             t = torch.as_tensor(trans[0], dtype=torch.float32, device=dev)
             rot = axis_angle_to_matrix(p)

@@ -234,7 +234,7 @@ def format_garment_evaluation(e: dict) -> str:
 @torch.no_grad()
 def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = None, label: str | None = None,
                  motion_file: str | Path | None = None, seed: int = 0, device: str = "cpu",
-                 push_out_margin: float | None = 0.002) -> dict[str, Any]:
+                 push_out_margin: float | None = 0.002, latent: str = "posterior") -> dict[str, Any]:
     """Paper 001's application: a motion (new, from the generator ``motion_run`` for ``label`` and
     ``seed``; or a motion library ``.npz`` such as an imported AMASS or BVH file), the garment
     predicted for it by the regressor, and the body posed on the template's body shape.
@@ -269,7 +269,7 @@ def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = Non
             raise InputError("a label needs a motion-generator run (--motion-model RUN) to sample from")
         from training.motion.run import sample_sequences
 
-        poses, trans, fps = sample_sequences(motion_run, label, 1, seed, device=device)
+        poses, trans, fps = sample_sequences(motion_run, label, 1, seed, device=device, latent=latent)
         poses, trans = poses[0], trans[0]
     poses_t = torch.as_tensor(np.asarray(poses), dtype=torch.float32, device=dev)
     trans_t = torch.as_tensor(np.asarray(trans), dtype=torch.float32, device=dev)

@@ -95,7 +95,15 @@ class MotionCVAE(nn.Module):
         return self.decode(z, label, x.shape[1]), mu, logvar
 
     @torch.no_grad()
-    def sample(self, label: torch.Tensor, frames: int, generator: torch.Generator | None = None) -> torch.Tensor:
-        """New sequences [B, frames, 147] of classes ``label`` [B]: Z ~ N(0, I) (plus the label's bias)."""
-        z = torch.randn(len(label), self.d_model, generator=generator, device="cpu").to(self.label_bias.device)
+    def sample(self, label: torch.Tensor, frames: int, generator: torch.Generator | None = None,
+               latent: tuple[torch.Tensor, torch.Tensor] | None = None) -> torch.Tensor:
+        """New sequences [B, frames, 147] of classes ``label`` [B], plus the label's bias. ``latent``
+        None: Z ~ N(0, I), the paper's prior; ``(mean, std)`` [labels, d_model]: Z ~ N(mean[label],
+        std[label]²), a per-label Gaussian fitted to the training posteriors (``run.fit_latents``)."""
+        eps = torch.randn(len(label), self.d_model, generator=generator, device="cpu").to(self.label_bias.device)
+        if latent is None:
+            z = eps
+        else:
+            mean, std = (t.to(eps.device, eps.dtype) for t in latent)
+            z = mean[label] + std[label] * eps
         return self.decode(z, label, frames)

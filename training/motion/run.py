@@ -9,6 +9,11 @@
   a trivial baseline (every frame the label's mean pose over the training segments, the true
   translation).
 - :func:`sample_motions`: new motions of a label, as the motion library's ``.npz``.
+- :func:`label_latents`: where samples come from. ``prior`` is the paper's Z ~ N(0, I);
+  ``posterior`` a Gaussian per label fitted to the training segments' posteriors (mean of μ; variance
+  of μ plus mean σ², per dimension), a density estimate made after training (Ghosh et al. 2020,
+  "From variational to deterministic autoencoders"): with λ_KL = 1e-5 the posteriors need not fill
+  N(0, I), and samples from the prior then land where the decoder was never trained.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ from training.loop import fit, prepare_run, resolve_device, run_checkpoint, seed
 from training.motion.config import MotionConfig
 
 KIND = "motion"
+LATENTS = ("posterior", "prior")
 
 
 def segment_labels(store, segments: np.ndarray) -> np.ndarray:
@@ -147,12 +153,78 @@ def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: s
         recognizer = train_recognizer(x_train, y_train, labels, epochs=recognizer_epochs, seed=0)
         frames = x_test.shape[1]
 
-        def generate(lab, g):
-            return module.model.sample(lab, frames, generator=g).float()
+        for latent in LATENTS:
+            fitted = label_latents(loaded, latent, device=dev)
 
-        e["generation"] = generation_metrics(recognizer, generate, x_test, y_test, x_train, repetitions=repetitions)
-        e["generation"]["recognizer_epochs"] = recognizer_epochs
+            def generate(lab, g, fitted=fitted):
+                return module.model.sample(lab, frames, generator=g, latent=fitted).float()
+
+            key = "generation" if latent == "prior" else f"generation_{latent}"
+            e[key] = generation_metrics(recognizer, generate, x_test, y_test, x_train, repetitions=repetitions)
+            e[key] |= {"recognizer_epochs": recognizer_epochs, "latent": latent}
     return e
+
+
+def _checkpoint_stamp(ckpt: Path) -> str:
+    st = ckpt.stat()
+    return f"{ckpt.name}:{st.st_size}:{st.st_mtime_ns}"
+
+
+@torch.no_grad()
+def fit_latents(module, store, device=None) -> dict[str, np.ndarray]:
+    """Each label's Gaussian over the training split's posteriors: ``mean`` [labels, d] (mean of μ),
+    ``std`` [labels, d] (sqrt of the variance of μ plus the mean σ², per dimension) and ``count``
+    [labels] segments; a label without training segments gets N(0, I)."""
+    from training.motion.module import pose_features
+
+    dev = device or torch.device("cpu")
+    module.to(dev)
+    L, d = module.model.labels, module.model.d_model
+    s1, s2, var = (torch.zeros(L, d, dtype=torch.float64, device=dev) for _ in range(3))
+    n = torch.zeros(L, dtype=torch.float64, device=dev)
+    for batch in torch.utils.data.DataLoader(_segments(store, "train"), batch_size=64, shuffle=False):
+        batch = {k: v.to(dev) for k, v in batch.items()}
+        x, _ = pose_features(batch)
+        label = batch["label"][:, 0].long()
+        mu, logvar = module.model.encode(x, label)
+        mu, sig2 = mu.double(), logvar.double().exp()
+        s1.index_add_(0, label, mu)
+        s2.index_add_(0, label, mu * mu)
+        var.index_add_(0, label, sig2)
+        n.index_add_(0, label, torch.ones_like(label, dtype=torch.float64))
+    seen = n > 0
+    c = n.clamp(min=1)[:, None]
+    mean = torch.where(seen[:, None], s1 / c, 0.0)
+    spread = (s2 / c - mean * mean).clamp(min=0) + var / c
+    std = torch.where(seen[:, None], spread.sqrt(), 1.0)
+    return {"mean": mean.float().cpu().numpy(), "std": std.float().cpu().numpy(), "count": n.long().cpu().numpy()}
+
+
+def label_latents(loaded, latent: str, *, device=None) -> tuple[torch.Tensor, torch.Tensor] | None:
+    """What ``MotionCVAE.sample`` draws Z from for ``latent`` (see the module docstring): None for
+    ``prior``; for ``posterior`` the per-label fit of :func:`fit_latents`, cached beside the
+    checkpoint (``<checkpoint>.latents.npz``, refitted when the checkpoint changes)."""
+    if latent not in LATENTS:
+        raise InputError(f"--latent must be one of {', '.join(LATENTS)}, got {latent!r}")
+    if latent == "prior":
+        return None
+    module, _, ckpt, store = loaded
+    cache = ckpt.with_name(ckpt.name + ".latents.npz")
+    stamp = _checkpoint_stamp(ckpt)
+    fit = None
+    if cache.is_file():
+        with np.load(cache) as z:
+            if str(z["stamp"]) == stamp:
+                fit = {k: z[k] for k in ("mean", "std", "count")}
+    if fit is None:
+        fit = fit_latents(module, store, device)
+        tmp = cache.with_name(cache.name + ".tmp.npz")
+        try:
+            np.savez(tmp, stamp=np.array(stamp), **fit)
+            tmp.replace(cache)
+        except OSError:  # a read-only run directory: use the fit without caching it
+            tmp.unlink(missing_ok=True)
+    return torch.as_tensor(fit["mean"]), torch.as_tensor(fit["std"])
 
 
 @torch.no_grad()
@@ -241,9 +313,13 @@ def format_motion_evaluation(e: dict) -> str:
     if g:
         lines += ["", f"generation (Table 4; {g['repetitions']} generated sets, mean ± 95 % interval; recogniser: "
                       f"GRU trained {g['recognizer_epochs']} epochs on the train split, {100 * g['recognizer_test_accuracy']:.1f} % "
-                      "on the real test motions):",
+                      "on the real test motions; Z from N(0, I), the paper's prior, and from each label's Gaussian "
+                      "fitted to the training posteriors):",
                   f"{'':22s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s}"]
-        for name, r in (("real test motions", g["real"]), ("generated", g["generated"])):
+        rows = [("real test motions", g["real"]), ("generated, prior", g["generated"])]
+        if e.get("generation_posterior"):
+            rows.append(("generated, posterior", e["generation_posterior"]["generated"]))
+        for name, r in rows:
             cells = []
             for k in ("fid", "accuracy", "diversity", "multimodality"):
                 scale = 100 if k == "accuracy" else 1
@@ -253,7 +329,7 @@ def format_motion_evaluation(e: dict) -> str:
 
 
 def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str | Path, *,
-                   device: str = "cpu", frames: int | None = None) -> list[Path]:
+                   device: str = "cpu", frames: int | None = None, latent: str = "posterior") -> list[Path]:
     """``count`` new motions of ``label`` from a trained generator, written into the directory ``out``
     as the motion library's ``.npz`` (readable by ``drape motion export``); returns the paths."""
     from datagen.motion.motion import Motion
@@ -267,8 +343,10 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
         raise InputError(f"--out {out} is a file; give a directory for the motions")
     if not out.parent.is_dir():
         raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
+    if latent not in LATENTS:
+        raise InputError(f"--latent must be one of {', '.join(LATENTS)}, got {latent!r}")
     loaded = load_motion(run)
-    poses, trans, fps = sample_sequences(loaded, label, count, seed, device=device, frames=frames)
+    poses, trans, fps = sample_sequences(loaded, label, count, seed, device=device, frames=frames, latent=latent)
     _, meta, ckpt, _ = loaded
     code = meta["labels"].index(label)
     out.mkdir(exist_ok=True)
@@ -276,7 +354,7 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
     for k in range(count):
         motion = Motion(poses=poses[k], trans=trans[k], fps=fps, label=code, label_name=label,
                         source={"kind": "generated", "model": KIND, "run": str(Path(run).resolve()),
-                                "checkpoint": ckpt.name, "seed": int(seed), "index": k})
+                                "checkpoint": ckpt.name, "seed": int(seed), "index": k, "latent": latent})
         path = out / f"{label}_{seed}_{k:03d}.npz"
         motion.save_npz(path)
         paths.append(path)
@@ -285,12 +363,13 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
 
 @torch.no_grad()
 def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "cpu",
-                     frames: int | None = None) -> tuple[np.ndarray, np.ndarray, float]:
+                     frames: int | None = None, latent: str = "posterior") -> tuple[np.ndarray, np.ndarray, float]:
     """``count`` new motions of ``label`` from a run directory (or what :func:`load_motion` returned
     for it, to load the checkpoint once): poses [count, T, 24, 3] (axis-angle), translations
     [count, T, 3] starting at the origin, and the frame rate; reproducible from ``seed``. ``frames``
     (default: the segment length it was trained on) may ask for longer motions: the decoder's
-    positions extend, but it has only learned the trained length."""
+    positions extend, but it has only learned the trained length. ``latent``: ``posterior`` (the
+    per-label fit, default) or ``prior`` (N(0, I), the paper's), :func:`label_latents`."""
     from datagen.geometry.rotations import matrix_to_axis_angle
     from training.motion.model import features_to_frames
 
@@ -298,16 +377,19 @@ def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "c
         raise InputError(f"--count must be 1 or more, got {count}")
     if seed < 0:
         raise InputError(f"--seed must be 0 or more, got {seed}")
-    module, meta, _, _ = load_motion(run) if isinstance(run, (str, Path)) else run
+    loaded = load_motion(run) if isinstance(run, (str, Path)) else run
+    module, meta, _, _ = loaded
     labels = meta["labels"]
     if label not in labels:
         raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
     if frames is not None and not 1 <= frames <= 100000:
         raise InputError(f"--frames must be between 1 and 100000, got {frames}")
-    module.to(torch.device("cuda" if resolve_device(device) == "gpu" else "cpu"))
+    dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
+    fitted = label_latents(loaded, latent, device=dev)
+    module.to(dev)
     g = torch.Generator().manual_seed(int(seed))
     x = module.model.sample(torch.full((count,), labels.index(label), dtype=torch.long, device=module.device),
-                            frames or meta["frames"], generator=g).float()
+                            frames or meta["frames"], generator=g, latent=fitted).float()
     rot, trans = features_to_frames(x)
     poses = matrix_to_axis_angle(rot).cpu().numpy().astype(np.float64)
     trans = (trans - trans[:, :1]).cpu().numpy().astype(np.float64)  # every motion starts at the origin

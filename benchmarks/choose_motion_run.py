@@ -1,0 +1,45 @@
+"""Choose the motion-generator run and latent by the validation split's generation figures.
+
+``python benchmarks/choose_motion_run.py OUT RUN...`` reads ``OUT/eval_<RUN>_val.json`` (``drape evaluate
+RUN --split val --json ...``) for each run, prints one line per (run, latent) with FID, recognition
+accuracy, diversity and multimodality, and last the run and latent with the lowest generated FID (the
+Fréchet distance to the real motions in the recogniser's feature space: realism and label fidelity
+at once). Only the validation split is read, so the test split stays unseen by the choice.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+
+def main(argv: list[str]) -> int:
+    out, runs = Path(argv[0]), argv[1:]
+    rows = []
+    for run in runs:
+        path = out / f"eval_{run}_val.json"
+        if not path.is_file():
+            print(f"{run}: no {path.name} (its evaluation failed?)")
+            continue
+        e = json.loads(path.read_text())
+        for key, latent in (("generation", "prior"), ("generation_posterior", "posterior")):
+            g = e.get(key)
+            if not g:
+                continue
+            r = g["generated"]
+            rows.append((r["fid"]["mean"], run, latent))
+            print(f"{run:16s} {latent:9s} FID {r['fid']['mean']:8.2f}  accuracy {100 * r['accuracy']['mean']:5.1f} %  "
+                  f"diversity {r['diversity']['mean']:6.2f}  multimodality {r['multimodality']['mean']:6.2f}  "
+                  f"(real: FID {g['real']['fid']['mean']:.2f}, diversity {g['real']['diversity']['mean']:.2f}, "
+                  f"multimodality {g['real']['multimodality']['mean']:.2f})")
+    if not rows:
+        print("no validation evaluation to choose from", file=sys.stderr)
+        return 1
+    _, run, latent = min(rows)
+    print(f"{run} {latent}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
