@@ -190,6 +190,25 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
     return result
 
 
+def plateau_patience(module, epochs: int, steps: int | None) -> int:
+    """Epochs without a better validation loss before the plateau schedule cuts the rate: ``epochs``,
+    or more where an epoch is short, so that at least ``steps`` optimiser steps pass. Paper 001's
+    "30 epochs" are epochs of its ~1,800 segments (108,705 frames): ~2,700 steps of 20; on a store of
+    240 segments 30 epochs are 360 steps, and the validation loss's noise then cut the rate to 1e-6
+    within 250 epochs (docs/training.md). ``module``'s trainer gives the steps per epoch."""
+    trainer = getattr(module, "_trainer", None)
+    if not steps or trainer is None:
+        return epochs
+    try:
+        total, max_epochs = trainer.estimated_stepping_batches, trainer.max_epochs
+    except Exception:  # no dataloader to count (e.g. a module used outside fit)
+        return epochs
+    if not max_epochs or max_epochs < 1 or not (0 < total < float("inf")):
+        return epochs
+    per_epoch = max(1.0, total / max_epochs)
+    return max(int(epochs), int(-(-steps // per_epoch)))
+
+
 def divergence_note(result: dict[str, Any], precision: str) -> str | None:
     """One line for a run whose monitored validation value became NaN or infinite, else None."""
     d = result.get("diverged")

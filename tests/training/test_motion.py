@@ -59,6 +59,25 @@ def test_training_loss_falls_and_the_checkpoint_is_written(motion_run):
     assert json.loads((run / "run.json").read_text())["kind"] == "motion"
 
 
+def test_the_plateau_schedule_waits_for_the_papers_steps_on_short_epochs(motion_run):
+    """Paper 001's 30 epochs are ~2,700 steps of its dataset; on a small store the schedule waits at
+    least that many steps (the trained run's scheduler state holds the patience it used)."""
+    import math
+    from types import SimpleNamespace
+
+    from training.loop import plateau_patience
+
+    run, result = motion_run
+    ckpt = torch.load(run / "checkpoints" / "last.ckpt", map_location="cpu", weights_only=False)
+    steps_per_epoch = math.ceil(result["train_segments"] / SMALL["batch_size"])
+    assert ckpt["lr_schedulers"][0]["patience"] == max(30, math.ceil(2700 / steps_per_epoch))
+    fake = SimpleNamespace(_trainer=SimpleNamespace(estimated_stepping_batches=12 * 5000, max_epochs=5000))
+    assert plateau_patience(fake, 30, 2700) == 225  # 12 steps an epoch: 225 epochs
+    fake._trainer.estimated_stepping_batches = 200 * 5000
+    assert plateau_patience(fake, 30, 2700) == 30  # long epochs: the paper's 30
+    assert plateau_patience(fake, 30, None) == 30
+
+
 def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys):
     from datagen.cli import main
     from training.motion.run import evaluate_motion

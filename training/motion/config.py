@@ -17,6 +17,9 @@ class MotionConfig:
         lr: Adam's learning rate (paper: 1e-4).
         lr_factor, lr_patience: the rate is multiplied by ``lr_factor`` when the validation loss has
             not fallen for ``lr_patience`` epochs (paper: 0.1 after 30).
+        lr_patience_steps: ... and for at least this many optimiser steps (2,700: paper 001's 30 epochs
+            of ~1,800 segments in batches of 20), so that a small store's short epochs do not cut the
+            rate on the validation loss's noise (``training.loop.plateau_patience``); None: epochs only.
         early_stop_patience: stop when the validation loss has not fallen for this many epochs.
         workers: DataLoader worker processes per training process.
         precision: Lightning's precision; ``auto``: bf16 mixed on a GPU, 32-bit on the CPU.
@@ -35,6 +38,7 @@ class MotionConfig:
     lr: float = field(default=1e-4, metadata={"min": 1e-7, "max": 1.0})
     lr_factor: float = field(default=0.1, metadata={"min": 0.01, "max": 1.0})
     lr_patience: int = field(default=30, metadata={"min": 1, "max": 100000})
+    lr_patience_steps: int | None = field(default=2700, metadata={"min": 1, "max": 10000000})
     early_stop_patience: int = field(default=200, metadata={"min": 1, "max": 100000})
     workers: int = field(default=0, metadata={"min": 0, "max": 64})
     precision: str = field(default="auto", metadata={"choices": ("auto", "32", "bf16-mixed", "16-mixed")})

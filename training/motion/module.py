@@ -112,6 +112,8 @@ class MotionModule(pl.LightningModule):
 
     def configure_optimizers(self):
         opt = torch.optim.Adam(self.parameters(), lr=self.config["lr"])
-        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"],
-                                                           patience=self.config["lr_patience"])
+        from training.loop import plateau_patience
+
+        patience = plateau_patience(self, self.config["lr_patience"], self.config.get("lr_patience_steps"))
+        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"], patience=patience)
         return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val/loss"}}
