@@ -84,8 +84,10 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
 
     run, _ = motion_run
     e = evaluate_motion(run, split="test", device="cpu", repetitions=3, recognizer_epochs=5)
-    for row in (e["model"], e["mean_pose_baseline"]):
+    for row in (e["model"], e["mean_pose_baseline"], e["own_mean_pose"]):
         assert all(np.isfinite(v) and v > 0 for v in row.values())
+    # the segment's own mean pose is the best static pose: closer than the label's mean on every frame set
+    assert e["own_mean_pose"]["pose_rmse"] < e["mean_pose_baseline"]["pose_rmse"]
     assert e["frames"] == e["segments"] * 3
     g = e["generation"]
     assert g["repetitions"] == 3 and 0 <= g["recognizer_test_accuracy"] <= 1
@@ -97,7 +99,7 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
     assert np.isfinite(gp["generated"]["fid"]["mean"])
     assert main(["evaluate", str(run), "--split", "test", "--device", "cpu", "--repetitions", "2"]) == 0
     out = capsys.readouterr().out
-    assert "label's mean pose" in out and "generated, prior" in out and "generated, posterior" in out
+    assert "label's mean pose" in out and "segment's own mean pose" in out and "generated, prior" in out and "generated, posterior" in out
     assert "multimodality" in out
 
 

@@ -7,7 +7,8 @@
   (m), the Hausdorff distance between predicted and true vertex sets (m, mean over frames), STED
   on the whole body mesh (:mod:`training.motion.sted`, mean over segments), beside
   a trivial baseline (every frame the label's mean pose over the training segments, the true
-  translation).
+  translation) and a static oracle (every frame the test segment's own mean pose, the true
+  translation: what a model that has learned each sequence's pose but none of its motion scores).
 - :func:`sample_motions`: new motions of a label, as the motion library's ``.npz``.
 - :func:`label_latents`: where samples come from. ``prior`` is the paper's Z ~ N(0, I);
   ``posterior`` a Gaussian per label fitted to the training segments' posteriors (mean of μ; variance
@@ -247,9 +248,9 @@ def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
         v = full(rot.reshape(B * T, 24, 3, 3), trans.reshape(B * T, 3), module.betas[body].repeat_interleave(T, 0))
         return v.reshape(B, T, -1, 3)
     test = _segments(store, split)
-    mean_pose = _mean_poses(_segments(store, "train"), len(meta["labels"]))
-    sums = {k: 0.0 for k in ("pose_sq", "vertex_sq", "hausdorff", "sted", "base_pose_sq", "base_vertex_sq",
-                             "base_hausdorff", "base_sted")}
+    mean_pose = _mean_poses(_segments(store, "train"), len(meta["labels"])).to(dev)
+    rows = ("model", "mean_pose_baseline", "own_mean_pose")
+    sums = {r: {"pose_sq": 0.0, "vertex_sq": 0.0, "hausdorff": 0.0, "sted": 0.0} for r in rows}
     counts = {"pose": 0, "vertex": 0, "frames": 0, "segments": 0}
     for batch in torch.utils.data.DataLoader(test, batch_size=8, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
@@ -258,35 +259,33 @@ def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
         mu, _ = module.model.encode(x, label)
         prot, ptrans = features_to_frames(module.model.decode(mu, label, x.shape[1]).float())
         body = batch["body"].long()
-        v_true = module.vertices(rot, x[..., -3:], body)
-        v_pred = module.vertices(prot, ptrans, body)
-        base_rot = axis_angle_to_matrix(mean_pose.to(dev)[label])[:, None].expand_as(rot)
-        v_base = module.vertices(base_rot, x[..., -3:], body)
         pose_true = batch["pose"].float()
         B, T = rot.shape[:2]
-        sums["pose_sq"] += float(((matrix_to_axis_angle(prot) - pose_true) ** 2).sum())
-        sums["base_pose_sq"] += float(((mean_pose.to(dev)[label][:, None] - pose_true) ** 2).sum())
-        counts["pose"] += pose_true.numel()
-        sums["vertex_sq"] += float(((v_pred - v_true) ** 2).sum())
-        sums["base_vertex_sq"] += float(((v_base - v_true) ** 2).sum())
-        counts["vertex"] += v_true.numel()
-        flat = (B * T, -1, 3)
-        sums["hausdorff"] += float(hausdorff(v_pred.reshape(flat), v_true.reshape(flat)).sum())
-        sums["base_hausdorff"] += float(hausdorff(v_base.reshape(flat), v_true.reshape(flat)).sum())
-        counts["frames"] += B * T
+        label_mean = mean_pose[label][:, None].expand_as(pose_true)  # the label's mean training pose
+        own_mean = pose_true.mean(1, keepdim=True).expand_as(pose_true)  # the segment's own mean pose, held
+        candidates = {"model": (matrix_to_axis_angle(prot), prot, ptrans),
+                      "mean_pose_baseline": (label_mean, axis_angle_to_matrix(label_mean), x[..., -3:]),
+                      "own_mean_pose": (own_mean, axis_angle_to_matrix(own_mean), x[..., -3:])}
+        v_true = module.vertices(rot, x[..., -3:], body)
         t_full = posed(rot, x[..., -3:], body)
-        sums["sted"] += float(sted(posed(prot, ptrans, body), t_full, edges)["sted"].sum())
-        sums["base_sted"] += float(sted(posed(base_rot, x[..., -3:], body), t_full, edges)["sted"].sum())
+        flat = (B * T, -1, 3)
+        for name, (aa, r, tr) in candidates.items():
+            v = module.vertices(r, tr, body)
+            acc = sums[name]
+            acc["pose_sq"] += float(((aa - pose_true) ** 2).sum())
+            acc["vertex_sq"] += float(((v - v_true) ** 2).sum())
+            acc["hausdorff"] += float(hausdorff(v.reshape(flat), v_true.reshape(flat)).sum())
+            acc["sted"] += float(sted(posed(r, tr, body), t_full, edges)["sted"].sum())
+        counts["pose"] += pose_true.numel()
+        counts["vertex"] += v_true.numel()
+        counts["frames"] += B * T
         counts["segments"] += B
-    row = {"pose_rmse": (sums["pose_sq"] / counts["pose"]) ** 0.5,
-           "vertex_rmse": (sums["vertex_sq"] / counts["vertex"]) ** 0.5,
-           "hausdorff": sums["hausdorff"] / counts["frames"], "sted": sums["sted"] / counts["segments"]}
-    base = {"pose_rmse": (sums["base_pose_sq"] / counts["pose"]) ** 0.5,
-            "vertex_rmse": (sums["base_vertex_sq"] / counts["vertex"]) ** 0.5,
-            "hausdorff": sums["base_hausdorff"] / counts["frames"], "sted": sums["base_sted"] / counts["segments"]}
+    out = {r: {"pose_rmse": (sums[r]["pose_sq"] / counts["pose"]) ** 0.5,
+               "vertex_rmse": (sums[r]["vertex_sq"] / counts["vertex"]) ** 0.5,
+               "hausdorff": sums[r]["hausdorff"] / counts["frames"], "sted": sums[r]["sted"] / counts["segments"]}
+           for r in rows}
     return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "segments": len(test),
-            "frames": counts["frames"], "vertex_stride": meta["config"]["vertex_stride"],
-            "model": row, "mean_pose_baseline": base}
+            "frames": counts["frames"], "vertex_stride": meta["config"]["vertex_stride"], **out}
 
 
 def _mean_poses(ds: SegmentDataset, labels: int) -> torch.Tensor:
@@ -304,10 +303,13 @@ def format_motion_evaluation(e: dict) -> str:
     m, b = e["model"], e["mean_pose_baseline"]
     lines = [f"{e['split']} split: {e['segments']} segments, {e['frames']} frames (vertex metrics on every "
              f"{e['vertex_stride']}. body vertex)", "", "reconstruction (paper 001 Table 3):",
-             f"{'':22s} {'pose RMSE (x1e-2)':>18s} {'vertex RMSE (x1e-2 m)':>22s} {'Hausdorff (x1e-1 m)':>20s} "
+             f"{'':24s} {'pose RMSE (x1e-2)':>18s} {'vertex RMSE (x1e-2 m)':>22s} {'Hausdorff (x1e-1 m)':>20s} "
              f"{'STED (x1e-2)':>13s}"]
-    for name, r in (("model", m), ("label's mean pose", b)):
-        lines.append(f"{name:22s} {100 * r['pose_rmse']:18.3f} {100 * r['vertex_rmse']:22.3f} "
+    named = [("model", m), ("label's mean pose", b)]
+    if e.get("own_mean_pose"):
+        named.append(("segment's own mean pose", e["own_mean_pose"]))
+    for name, r in named:
+        lines.append(f"{name:24s} {100 * r['pose_rmse']:18.3f} {100 * r['vertex_rmse']:22.3f} "
                      f"{10 * r['hausdorff']:20.3f} {100 * r['sted']:13.3f}")
     g = e.get("generation")
     if g:
@@ -315,7 +317,7 @@ def format_motion_evaluation(e: dict) -> str:
                       f"GRU trained {g['recognizer_epochs']} epochs on the train split, {100 * g['recognizer_test_accuracy']:.1f} % "
                       "on the real test motions; Z from N(0, I), the paper's prior, and from each label's Gaussian "
                       "fitted to the training posteriors):",
-                  f"{'':22s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s}"]
+                  f"{'':24s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s}"]
         rows = [("real test motions", g["real"]), ("generated, prior", g["generated"])]
         if e.get("generation_posterior"):
             rows.append(("generated, posterior", e["generation_posterior"]["generated"]))
@@ -324,7 +326,7 @@ def format_motion_evaluation(e: dict) -> str:
             for k in ("fid", "accuracy", "diversity", "multimodality"):
                 scale = 100 if k == "accuracy" else 1
                 cells.append(f"{scale * r[k]['mean']:9.3f}±{scale * r[k]['interval']:<6.3f}")
-            lines.append(f"{name:22s} " + " ".join(f"{c:>16s}" for c in cells))
+            lines.append(f"{name:24s} " + " ".join(f"{c:>16s}" for c in cells))
     return "\n".join(lines)
 
 
