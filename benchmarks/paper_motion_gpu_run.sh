@@ -5,6 +5,8 @@
 #   OUT=/tmp/o PHASE=train bash ...   the motion generator at λ_KL = 1e-5 (the paper's), 1e-4 and 1e-3,
 #       and without the vertex loss (Table 8), and the garment regressor per template (skirt, tshirt,
 #       pants) with the learned and a zero BOS (Table 9), all on the GPU at once
+#   OUT=/tmp/o PHASE=more TOTAL=16 bash ...   every run of PHASE=train resumed for another command, to
+#       TOTAL minutes of training in all (repeat with a larger TOTAL)
 #   OUT=/tmp/o PHASE=eval bash ...    the validation split picks the KL weight and the latent (prior or
 #       per-label posterior fit) by generated FID; then Tables 3, 4, 6, 7, 8, 9 on the test split;
 #       refinement of the skirt (§3.4); sampled motions per label (for the contact sheets); a clothed
@@ -44,6 +46,23 @@ train)
   for r in $MOTIONS $(for g in $GARMENTS; do echo $g ${g}_zero_bos; done); do
     mkdir -p "$OUT/runs/$r"; cp -r "$RUNS/$r/logs" "$RUNS/$r/run.json" "$OUT/runs/$r/" 2>/dev/null
     cp "$RUNS/$r/train_summary.json" "$OUT/runs/$r/" 2>/dev/null; echo "== $r"; tail -3 "$OUT/train_$r.log"
+  done ;;
+more)  # another command of training for every run of PHASE=train: TOTAL minutes in all (Lightning's timer
+  # counts the minutes already trained); the plateau schedule and early stopping carry on where they were
+  TOTAL=${TOTAL:-16}; common="--data $STORE --device $DEV --resume --max-minutes $TOTAL"
+  tm() { $D train motion $common --out "$RUNS/$1" --config "$2" $3 > "$OUT/more_$1.log" 2>&1; }
+  tm motion benchmarks/configs/motion_paper.yaml &
+  tm motion_kl1e-4 benchmarks/configs/motion_paper_kl1e-4.yaml &
+  tm motion_kl1e-3 benchmarks/configs/motion_paper_kl1e-3.yaml &
+  tm motion_novl benchmarks/configs/motion_paper.yaml --no-vertex-loss &
+  for g in $GARMENTS; do
+    $D train garment $common --garment $g --out "$RUNS/$g" --config benchmarks/configs/garment_paper.yaml > "$OUT/more_$g.log" 2>&1 &
+    $D train garment $common --garment $g --zero-bos --out "$RUNS/${g}_zero_bos" --config benchmarks/configs/garment_paper.yaml > "$OUT/more_${g}_zero_bos.log" 2>&1 &
+  done
+  wait
+  for r in $MOTIONS $(for g in $GARMENTS; do echo $g ${g}_zero_bos; done); do
+    mkdir -p "$OUT/runs/$r"; cp -r "$RUNS/$r/logs" "$RUNS/$r/run.json" "$OUT/runs/$r/" 2>/dev/null
+    cp "$RUNS/$r/train_summary.json" "$OUT/runs/$r/" 2>/dev/null; echo "== $r"; tail -3 "$OUT/more_$r.log"
   done ;;
 eval)
   ev() { $D evaluate "$RUNS/$1" --split $2 --device $DEV --json "$OUT/eval_${1}_$2.json" $3 > "$OUT/eval_${1}_$2.log" 2>&1; }

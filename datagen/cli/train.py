@@ -13,6 +13,9 @@ def _run_arguments(p, config_class: str) -> None:
     p.add_argument("--out", required=True, help="the run directory")
     p.add_argument("--config", default=None, help=f"training config (.toml/.yaml/.json; fields of {config_class})")
     p.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
+    p.add_argument("--max-minutes", type=float, default=None,
+                   help="wall-time limit in minutes (overrides the config); with --resume the limit counts the "
+                        "time already trained, so give the new total")
     p.add_argument("--device", default="auto", help="cpu, cuda or auto")
     p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
     p.add_argument("--force", action="store_true", help="replace the run in --out")
@@ -24,7 +27,8 @@ def _train_config(cls, args, **overrides):
     from datagen.config import load_config
 
     data = load_config(cls, args.config).as_dict() if args.config else cls().as_dict()
-    data |= {k: v for k, v in {**overrides, "epochs": args.epochs}.items() if v is not None}
+    data |= {k: v for k, v in {**overrides, "epochs": args.epochs, "max_minutes": args.max_minutes}.items()
+             if v is not None}
     return load_config(cls, data)
 
 

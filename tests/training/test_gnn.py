@@ -138,12 +138,13 @@ def test_ddp_on_two_cpu_processes_follows_one_process(train_store, tmp_path):
     assert len(a) == len(b) == 3
     assert b[-1] < b[0]
     np.testing.assert_allclose(b, a, rtol=0.35)
-    # the two-process run's checkpoint resumes in one process, given one more epoch
+    # the two-process run's checkpoint resumes in one process, given one more epoch and a time limit
     more = subprocess.run([sys.executable, "-m", "datagen.cli", *base, "--out", str(tmp_path / "two"), "--resume",
-                           "--epochs", "4"], capture_output=True, text=True)
+                           "--epochs", "4", "--max-minutes", "30"], capture_output=True, text=True)
     assert more.returncode == 0, more.stderr[-2000:]
     assert len(epoch_losses(tmp_path / "two")) == 4
-    assert json.loads((tmp_path / "two" / "run.json").read_text())["config"]["epochs"] == 4
+    config = json.loads((tmp_path / "two" / "run.json").read_text())["config"]
+    assert config["epochs"] == 4 and config["max_minutes"] == 30
 
 
 def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
