@@ -29,8 +29,10 @@ def main(argv: list[str]) -> int:
                 continue
             r = g["generated"]
             rows.append((r["fid"]["mean"], run, latent))
+            speed = (f"speed {r['speed']['mean'] / g['real']['speed']['mean']:4.2f}x of real  "
+                     if "speed" in r and g["real"].get("speed", {}).get("mean") else "")
             print(f"{run:16s} {latent:9s} FID {r['fid']['mean']:8.2f}  accuracy {100 * r['accuracy']['mean']:5.1f} %  "
-                  f"diversity {r['diversity']['mean']:6.2f}  multimodality {r['multimodality']['mean']:6.2f}  "
+                  f"diversity {r['diversity']['mean']:6.2f}  multimodality {r['multimodality']['mean']:6.2f}  {speed}"
                   f"(real: FID {g['real']['fid']['mean']:.2f}, diversity {g['real']['diversity']['mean']:.2f}, "
                   f"multimodality {g['real']['multimodality']['mean']:.2f})")
     if not rows:

@@ -97,6 +97,7 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
     gp = e["generation_posterior"]
     assert gp["latent"] == "posterior" and g["latent"] == "prior" and gp["real"] == g["real"]
     assert np.isfinite(gp["generated"]["fid"]["mean"])
+    assert g["real"]["speed"]["mean"] > 0 and gp["generated"]["speed"]["mean"] >= 0
     assert main(["evaluate", str(run), "--split", "test", "--device", "cpu", "--repetitions", "2"]) == 0
     out = capsys.readouterr().out
     assert "label's mean pose" in out and "segment's own mean pose" in out and "generated, prior" in out and "generated, posterior" in out
@@ -152,6 +153,14 @@ def test_generation_metrics_on_known_features():
     assert diversity(two, 1000, rng) == pytest.approx(2.5, abs=0.3)  # pairs drawn with replacement: 0 or 5
     f = np.array([[0.0], [1.0], [100.0], [101.0]])
     assert multimodality(f, np.array([0, 0, 1, 1]), 2000, rng) == pytest.approx(0.5, abs=0.1)
+    from training.motion.recognition import motion_speed
+
+    still = torch.ones(2, 60, 147)
+    still[..., -3:] = torch.linspace(0, 5, 60)[None, :, None]  # the root's travel is not the joints' speed
+    assert motion_speed(still) == 0.0
+    ramp = still.clone()
+    ramp[..., :144] += 0.01 * torch.arange(60.0)[None, :, None]
+    assert motion_speed(ramp) == pytest.approx(0.01, rel=1e-4)
 
 
 def test_sampled_motions_are_library_motions_that_export(motion_run, tmp_path, capsys):

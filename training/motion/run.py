@@ -317,14 +317,17 @@ def format_motion_evaluation(e: dict) -> str:
                       f"GRU trained {g['recognizer_epochs']} epochs on the train split, {100 * g['recognizer_test_accuracy']:.1f} % "
                       "on the real test motions; Z from N(0, I), the paper's prior, and from each label's Gaussian "
                       "fitted to the training posteriors):",
-                  f"{'':24s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s}"]
+                  f"{'':24s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s} "
+                  f"{'speed (x1e-3)':>16s}"]
         rows = [("real test motions", g["real"]), ("generated, prior", g["generated"])]
         if e.get("generation_posterior"):
             rows.append(("generated, posterior", e["generation_posterior"]["generated"]))
         for name, r in rows:
             cells = []
-            for k in ("fid", "accuracy", "diversity", "multimodality"):
-                scale = 100 if k == "accuracy" else 1
+            for k in ("fid", "accuracy", "diversity", "multimodality", "speed"):
+                if k not in r:  # an evaluation written before speed was measured
+                    continue
+                scale = {"accuracy": 100, "speed": 1000}.get(k, 1)
                 cells.append(f"{scale * r[k]['mean']:9.3f}±{scale * r[k]['interval']:<6.3f}")
             lines.append(f"{name:24s} " + " ".join(f"{c:>16s}" for c in cells))
     return "\n".join(lines)
