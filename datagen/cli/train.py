@@ -187,6 +187,10 @@ def _cmd_train_motion(args) -> int:
     result = train_motion(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments; "
           f"best validation loss {result['best']:.4f} ({result['best_checkpoint']})")
+    if result["labels_without_training_segments"]:
+        print(f"warning: no training segments of {', '.join(result['labels_without_training_segments'])} (their "
+              "scenes failed or their motions are not in the train split): the generator has not learned them and "
+              "`drape sample motion` refuses them")
     return _diverged(result, config)
 
 

@@ -189,7 +189,11 @@ def test_sampled_motions_are_library_motions_that_export(motion_run, tmp_path, c
 def test_bad_input_gets_one_clear_line(motion_run, tmp_path):
     from training.motion.run import load_motion, sample_motions
 
-    run, _ = motion_run
+    run, result = motion_run
+    unseen = result["labels_without_training_segments"]  # the micro store trains on a few of the 17 labels
+    assert unseen and "walk" not in unseen
+    with pytest.raises(InputError, match=f"label '{unseen[0]}' had no training segments in this run.*it learned: .*walk"):
+        sample_motions(run, unseen[0], 2, 0, tmp_path / "a")
     with pytest.raises(InputError, match="not one this model was trained on: walk"):
         sample_motions(run, "moonwalk", 2, 0, tmp_path / "a")
     with pytest.raises(InputError, match="--count must be 1 or more"):

@@ -95,6 +95,8 @@ def train_motion(data: str | Path, out: str | Path, config: MotionConfig, *, dev
     store = open_store(data)
     labels = _label_names(store)
     train, val = _segments(store, "train"), _segments(store, "val")
+    counts = np.bincount(segment_labels(store, train.segments), minlength=len(labels))
+    unseen = [name for name, c in zip(labels, counts) if c == 0]
     meta = {"kind": KIND, "config": config.as_dict(), "labels": labels,
             "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
                       "code_version": store.attrs.get("code_version"),
@@ -107,7 +109,8 @@ def train_motion(data: str | Path, out: str | Path, config: MotionConfig, *, dev
     result = fit(module, _loader(train, config, shuffle=True), _loader(val, config, shuffle=False), config, out,
                  device=device, resume=resume, monitor="val/loss")
     result |= {"seconds": time.perf_counter() - t0, "train_segments": len(train), "val_segments": len(val),
-               "parameters": sum(p.numel() for p in module.model.parameters())}
+               "parameters": sum(p.numel() for p in module.model.parameters()),
+               "labels_without_training_segments": unseen}
     (out / "train_summary.json").write_text(json.dumps(result, indent=2))
     return result
 
@@ -201,6 +204,30 @@ def fit_latents(module, store, device=None) -> dict[str, np.ndarray]:
     return {"mean": mean.float().cpu().numpy(), "std": std.float().cpu().numpy(), "count": n.long().cpu().numpy()}
 
 
+def label_segment_counts(loaded, *, device=None) -> np.ndarray:
+    """Training segments per label of a loaded run (from the per-label fit, cached like it)."""
+    return _posterior_fit(loaded, device)["count"]
+
+
+def _posterior_fit(loaded, device=None) -> dict[str, np.ndarray]:
+    """:func:`fit_latents` of a loaded run, cached beside its checkpoint (refitted when it changes)."""
+    module, _, ckpt, store = loaded
+    cache = ckpt.with_name(ckpt.name + ".latents.npz")
+    stamp = _checkpoint_stamp(ckpt)
+    if cache.is_file():
+        with np.load(cache) as z:
+            if str(z["stamp"]) == stamp:
+                return {k: z[k] for k in ("mean", "std", "count")}
+    fit = fit_latents(module, store, device)
+    tmp = cache.with_name(cache.name + ".tmp.npz")
+    try:
+        np.savez(tmp, stamp=np.array(stamp), **fit)
+        tmp.replace(cache)
+    except OSError:  # a read-only run directory: use the fit without caching it
+        tmp.unlink(missing_ok=True)
+    return fit
+
+
 def label_latents(loaded, latent: str, *, device=None) -> tuple[torch.Tensor, torch.Tensor] | None:
     """What ``MotionCVAE.sample`` draws Z from for ``latent`` (see the module docstring): None for
     ``prior``; for ``posterior`` the per-label fit of :func:`fit_latents`, cached beside the
@@ -209,22 +236,7 @@ def label_latents(loaded, latent: str, *, device=None) -> tuple[torch.Tensor, to
         raise InputError(f"--latent must be one of {', '.join(LATENTS)}, got {latent!r}")
     if latent == "prior":
         return None
-    module, _, ckpt, store = loaded
-    cache = ckpt.with_name(ckpt.name + ".latents.npz")
-    stamp = _checkpoint_stamp(ckpt)
-    fit = None
-    if cache.is_file():
-        with np.load(cache) as z:
-            if str(z["stamp"]) == stamp:
-                fit = {k: z[k] for k in ("mean", "std", "count")}
-    if fit is None:
-        fit = fit_latents(module, store, device)
-        tmp = cache.with_name(cache.name + ".tmp.npz")
-        try:
-            np.savez(tmp, stamp=np.array(stamp), **fit)
-            tmp.replace(cache)
-        except OSError:  # a read-only run directory: use the fit without caching it
-            tmp.unlink(missing_ok=True)
+    fit = _posterior_fit(loaded, device)
     return torch.as_tensor(fit["mean"]), torch.as_tensor(fit["std"])
 
 
@@ -390,6 +402,12 @@ def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "c
     if frames is not None and not 1 <= frames <= 100000:
         raise InputError(f"--frames must be between 1 and 100000, got {frames}")
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
+    counts = label_segment_counts(loaded, device=dev)
+    if counts[labels.index(label)] == 0:
+        seen = [name for name, c in zip(labels, counts) if c > 0]
+        raise InputError(f"label {label!r} had no training segments in this run (its scenes all failed or its "
+                         f"motions were not in the train split), so the generator cannot make it; it learned: "
+                         f"{', '.join(seen)}")
     fitted = label_latents(loaded, latent, device=dev)
     module.to(dev)
     g = torch.Generator().manual_seed(int(seed))
