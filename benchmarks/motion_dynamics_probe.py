@@ -15,6 +15,8 @@ from datagen.motion.library import make_motion
 from datagen.motion.labels import LABELS
 from datagen.geometry.rotations import axis_angle_to_matrix
 from training.motion.model import MotionCVAE, frames_to_features
+from training.motion.recognition import motion_speed
+from training.motion.run import label_gaussians
 
 torch.manual_seed(0); np.random.seed(0)
 d, layers, ff = int(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
@@ -30,7 +32,7 @@ for li, lab in enumerate(LABELS):
             xs.append(frames_to_features(axis_angle_to_matrix(p[sl])[None], t[sl][None])[0]); ys.append(li)
 X = torch.stack(xs); Y = torch.tensor(ys)
 print("segments", len(X), "labels", len(LABELS), flush=True)
-real_speed = (X[:, 1:, :144] - X[:, :-1, :144]).abs().mean().item()
+real_speed = motion_speed(X)
 model = MotionCVAE(len(LABELS), d_model=d, heads=4, layers=layers, feedforward=ff, dropout=0.1, label_hidden=128)
 opt = torch.optim.Adam(model.parameters(), lr=lr)
 steps = 0; t0 = time.time()
@@ -48,13 +50,12 @@ for ep in range(1, epochs + 1):
         with torch.no_grad():
             mu, logvar = model.encode(X, Y)
             rec = model.decode(mu, Y, 60)
-            rs = (rec[:, 1:, :144] - rec[:, :-1, :144]).abs().mean().item()
-            mean = torch.stack([mu[Y == l].mean(0) for l in range(len(LABELS))])
-            std = torch.stack([(mu[Y == l].var(0, unbiased=False) + logvar[Y == l].exp().mean(0)).sqrt() for l in range(len(LABELS))])
+            rs = motion_speed(rec)
+            fit = label_gaussians(mu, logvar, Y, len(LABELS))
             g = torch.Generator().manual_seed(0)
             lab = torch.arange(len(LABELS)).repeat(4)
-            smp = model.sample(lab, 60, generator=g, latent=(mean, std))
-            ss = (smp[:, 1:, :144] - smp[:, :-1, :144]).abs().mean().item()
+            smp = model.sample(lab, 60, generator=g, latent=(torch.as_tensor(fit["mean"]), torch.as_tensor(fit["std"])))
+            ss = motion_speed(smp)
             mse = torch.nn.functional.mse_loss(rec, X).item()
         print(f"epoch {ep:5d} step {steps:6d} {time.time() - t0:6.0f}s loss {loss.item():.5f} rec mse {mse:.5f} "
               f"kl {kl.item():7.1f} speed: reconstruction {rs / real_speed:.2f}x, samples {ss / real_speed:.2f}x of real", flush=True)

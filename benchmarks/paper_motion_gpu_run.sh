@@ -31,38 +31,23 @@ gen)
     grep "^scene .*failed" "$OUT"/generate_*.log | sed 's/.*failed at frame [0-9]*: //; s/:.*//' | sort | uniq -c
     du -sh "$STORE"
   fi ;;
-train)
-  common="--data $STORE --device $DEV --force"
-  tm() { $D train motion $common --out "$RUNS/$1" --config "$2" $3 > "$OUT/train_$1.log" 2>&1; }
+train|more)  # more: another command for every run of train, to TOTAL minutes in all (Lightning's timer
+  # counts the minutes already trained; the plateau schedule and early stopping carry on where they were)
+  if [ "$PHASE" = more ]; then common="--data $STORE --device $DEV --resume --max-minutes ${TOTAL:-16}"
+  else common="--data $STORE --device $DEV --force"; fi
+  tm() { $D train motion $common --out "$RUNS/$1" --config "$2" $3 > "$OUT/${PHASE}_$1.log" 2>&1; }
   tm motion benchmarks/configs/motion_paper.yaml &
   tm motion_kl1e-4 benchmarks/configs/motion_paper_kl1e-4.yaml &
   tm motion_kl1e-3 benchmarks/configs/motion_paper_kl1e-3.yaml &
   tm motion_novl benchmarks/configs/motion_paper.yaml --no-vertex-loss &
   for g in $GARMENTS; do
-    $D train garment $common --garment $g --out "$RUNS/$g" --config benchmarks/configs/garment_paper.yaml > "$OUT/train_$g.log" 2>&1 &
-    $D train garment $common --garment $g --zero-bos --out "$RUNS/${g}_zero_bos" --config benchmarks/configs/garment_paper.yaml > "$OUT/train_${g}_zero_bos.log" 2>&1 &
+    $D train garment $common --garment $g --out "$RUNS/$g" --config benchmarks/configs/garment_paper.yaml > "$OUT/${PHASE}_$g.log" 2>&1 &
+    $D train garment $common --garment $g --zero-bos --out "$RUNS/${g}_zero_bos" --config benchmarks/configs/garment_paper.yaml > "$OUT/${PHASE}_${g}_zero_bos.log" 2>&1 &
   done
   wait
   for r in $MOTIONS $(for g in $GARMENTS; do echo $g ${g}_zero_bos; done); do
     mkdir -p "$OUT/runs/$r"; cp -r "$RUNS/$r/logs" "$RUNS/$r/run.json" "$OUT/runs/$r/" 2>/dev/null
-    cp "$RUNS/$r/train_summary.json" "$OUT/runs/$r/" 2>/dev/null; echo "== $r"; tail -3 "$OUT/train_$r.log"
-  done ;;
-more)  # another command of training for every run of PHASE=train: TOTAL minutes in all (Lightning's timer
-  # counts the minutes already trained); the plateau schedule and early stopping carry on where they were
-  TOTAL=${TOTAL:-16}; common="--data $STORE --device $DEV --resume --max-minutes $TOTAL"
-  tm() { $D train motion $common --out "$RUNS/$1" --config "$2" $3 > "$OUT/more_$1.log" 2>&1; }
-  tm motion benchmarks/configs/motion_paper.yaml &
-  tm motion_kl1e-4 benchmarks/configs/motion_paper_kl1e-4.yaml &
-  tm motion_kl1e-3 benchmarks/configs/motion_paper_kl1e-3.yaml &
-  tm motion_novl benchmarks/configs/motion_paper.yaml --no-vertex-loss &
-  for g in $GARMENTS; do
-    $D train garment $common --garment $g --out "$RUNS/$g" --config benchmarks/configs/garment_paper.yaml > "$OUT/more_$g.log" 2>&1 &
-    $D train garment $common --garment $g --zero-bos --out "$RUNS/${g}_zero_bos" --config benchmarks/configs/garment_paper.yaml > "$OUT/more_${g}_zero_bos.log" 2>&1 &
-  done
-  wait
-  for r in $MOTIONS $(for g in $GARMENTS; do echo $g ${g}_zero_bos; done); do
-    mkdir -p "$OUT/runs/$r"; cp -r "$RUNS/$r/logs" "$RUNS/$r/run.json" "$OUT/runs/$r/" 2>/dev/null
-    cp "$RUNS/$r/train_summary.json" "$OUT/runs/$r/" 2>/dev/null; echo "== $r"; tail -3 "$OUT/more_$r.log"
+    cp "$RUNS/$r/train_summary.json" "$OUT/runs/$r/" 2>/dev/null; echo "== $r"; tail -3 "$OUT/${PHASE}_$r.log"
   done ;;
 eval)
   ev() { $D evaluate "$RUNS/$1" --split $2 --device $DEV --json "$OUT/eval_${1}_$2.json" $3 > "$OUT/eval_${1}_$2.log" 2>&1; }

@@ -20,19 +20,12 @@ from pathlib import Path
 import numpy as np
 
 
-def joint_positions(poses: np.ndarray, trans: np.ndarray, body: dict, betas: np.ndarray) -> np.ndarray:
-    """Posed joints [T, 24, 3] (m) of axis-angle poses [T, 24, 3] and translations [T, 3]."""
-    from datagen.geometry.rotations import axis_angle_to_matrix
-    from datagen.geometry.skinning import rigid_transforms_np
-    import torch
-
-    S = len(betas)
-    shaped = body["v_template"] + np.einsum("vcs,s->vc", body["shapedirs"][:, :, :S], betas)
-    rest = body["J_regressor"] @ shaped
-    rot = axis_angle_to_matrix(torch.as_tensor(poses, dtype=torch.float64)).numpy()
+def joint_positions(body, poses: np.ndarray, trans: np.ndarray, betas: np.ndarray) -> np.ndarray:
+    """Posed joints [T, 24, 3] (m) of axis-angle poses [T, 24, 3] and translations [T, 3] on ``body``
+    (a :class:`datagen.body.model.BodyModel`)."""
     T = len(poses)
-    joints, _ = rigid_transforms_np(rot, np.broadcast_to(rest, (T, *rest.shape)).copy(), [int(p) for p in body["parents"]])
-    return joints + trans[:, None, :]
+    _, joints = body.pose(np.broadcast_to(betas, (T, len(betas))), poses.reshape(T, -1), trans)
+    return joints
 
 
 def speed(joints: np.ndarray, fps: float) -> float:
@@ -49,14 +42,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--frames", type=int, default=6, help="frames per strip")
     args = ap.parse_args(argv)
 
+    from datagen.body.model import BodyModel
     from datagen.body.render import VIEWS, pyplot, view_rotation
     from datagen.motion.library import make_motion
     from datagen.motion.motion import Motion
     from datagen.store import open_store
 
     store = open_store(args.store)
-    body, betas = store.body_model(), np.asarray(store.betas()[0], dtype=np.float64)
-    parents = [int(p) for p in body["parents"]]
+    arrays = store.body_model()
+    body = BodyModel(**{k: arrays[k] for k in ("v_template", "shapedirs", "J_regressor", "weights", "parents",
+                                               "faces")}, posedirs=None)
+    betas = np.asarray(store.betas()[0], dtype=np.float64)
+    parents = [int(p) for p in body.parents]
     labels = sorted(p.name for p in args.samples.iterdir() if p.is_dir() and any(p.glob("*.npz")))
     if not labels:
         print(f"{args.samples} has no <label>/*.npz folders", file=sys.stderr)
@@ -72,13 +69,13 @@ def main(argv: list[str] | None = None) -> int:
         gen = [Motion.load_npz(f) for f in files]
         T = gen[0].frame_count
         real = make_motion(label, 9, frames=T, fps=gen[0].fps)
-        speeds = [speed(joint_positions(m.poses, m.trans, body, betas), m.fps) for m in gen]
-        real_speed = speed(joint_positions(real.poses, real.trans - real.trans[:1], body, betas), real.fps)
+        speeds = [speed(joint_positions(body, m.poses, m.trans, betas), m.fps) for m in gen]
+        real_speed = speed(joint_positions(body, real.poses, real.trans - real.trans[:1], betas), real.fps)
         print(f"{label:14s} {' '.join(f'{s:6.3f}' for s in speeds):>34s} {real_speed:9.3f} "
               f"{np.mean(speeds) / real_speed:6.2f}")
         for col, (name, m, v) in enumerate((("generated", gen[0], speeds[0]), ("real (seed 9)", real, real_speed))):
             ax = axes[row, col]
-            j = joint_positions(m.poses, m.trans - m.trans[:1], body, betas) @ rot.T
+            j = joint_positions(body, m.poses, m.trans - m.trans[:1], betas) @ rot.T
             picks = np.linspace(0, T - 1, args.frames).round().astype(int)
             for k, t in enumerate(picks):
                 p = j[t] - j[0, 0] * np.array([1.0, 0.0, 0.0]) + np.array([0.8 * k, 0.0, 0.0])

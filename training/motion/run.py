@@ -95,8 +95,7 @@ def train_motion(data: str | Path, out: str | Path, config: MotionConfig, *, dev
     store = open_store(data)
     labels = _label_names(store)
     train, val = _segments(store, "train"), _segments(store, "val")
-    counts = np.bincount(segment_labels(store, train.segments), minlength=len(labels))
-    unseen = [name for name, c in zip(labels, counts) if c == 0]
+    unseen = [name for name, c in zip(labels, train_label_counts(store, len(labels))) if c == 0]
     meta = {"kind": KIND, "config": config.as_dict(), "labels": labels,
             "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
                       "code_version": store.attrs.get("code_version"),
@@ -174,39 +173,42 @@ def _checkpoint_stamp(ckpt: Path) -> str:
     return f"{ckpt.name}:{st.st_size}:{st.st_mtime_ns}"
 
 
+def label_gaussians(mu: torch.Tensor, logvar: torch.Tensor, label: torch.Tensor, labels: int) -> dict[str, np.ndarray]:
+    """Each label's Gaussian over posteriors (μ, log σ²) [N, d] of classes ``label`` [N]: ``mean``
+    [labels, d] (mean of μ), ``std`` [labels, d] (sqrt of the variance of μ plus the mean σ², per
+    dimension) and ``count`` [labels]; a label without segments gets N(0, I)."""
+    mu, sig2 = mu.double(), logvar.double().exp()
+    d = mu.shape[1]
+    mean, std = torch.zeros(labels, d, dtype=torch.float64), torch.ones(labels, d, dtype=torch.float64)
+    count = torch.bincount(label.cpu(), minlength=labels)
+    for k in torch.nonzero(count).flatten().tolist():
+        rows = label.cpu() == k
+        m = mu.cpu()[rows]
+        mean[k] = m.mean(0)
+        std[k] = (m.var(0, unbiased=False) + sig2.cpu()[rows].mean(0)).sqrt()
+    return {"mean": mean.float().numpy(), "std": std.float().numpy(), "count": count.numpy()}
+
+
 @torch.no_grad()
 def fit_latents(module, store, device=None) -> dict[str, np.ndarray]:
-    """Each label's Gaussian over the training split's posteriors: ``mean`` [labels, d] (mean of μ),
-    ``std`` [labels, d] (sqrt of the variance of μ plus the mean σ², per dimension) and ``count``
-    [labels] segments; a label without training segments gets N(0, I)."""
+    """:func:`label_gaussians` of the training split's posteriors under ``module``'s encoder."""
     from training.motion.module import pose_features
 
     dev = device or torch.device("cpu")
     module.to(dev)
-    L, d = module.model.labels, module.model.d_model
-    s1, s2, var = (torch.zeros(L, d, dtype=torch.float64, device=dev) for _ in range(3))
-    n = torch.zeros(L, dtype=torch.float64, device=dev)
+    mus, logvars, labels = [], [], []
     for batch in torch.utils.data.DataLoader(_segments(store, "train"), batch_size=64, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
         x, _ = pose_features(batch)
         label = batch["label"][:, 0].long()
         mu, logvar = module.model.encode(x, label)
-        mu, sig2 = mu.double(), logvar.double().exp()
-        s1.index_add_(0, label, mu)
-        s2.index_add_(0, label, mu * mu)
-        var.index_add_(0, label, sig2)
-        n.index_add_(0, label, torch.ones_like(label, dtype=torch.float64))
-    seen = n > 0
-    c = n.clamp(min=1)[:, None]
-    mean = torch.where(seen[:, None], s1 / c, 0.0)
-    spread = (s2 / c - mean * mean).clamp(min=0) + var / c
-    std = torch.where(seen[:, None], spread.sqrt(), 1.0)
-    return {"mean": mean.float().cpu().numpy(), "std": std.float().cpu().numpy(), "count": n.long().cpu().numpy()}
+        mus.append(mu.float().cpu()), logvars.append(logvar.float().cpu()), labels.append(label.cpu())
+    return label_gaussians(torch.cat(mus), torch.cat(logvars), torch.cat(labels), module.model.labels)
 
 
-def label_segment_counts(loaded, *, device=None) -> np.ndarray:
-    """Training segments per label of a loaded run (from the per-label fit, cached like it)."""
-    return _posterior_fit(loaded, device)["count"]
+def train_label_counts(store, labels: int) -> np.ndarray:
+    """Labelled training segments per label [labels], from the store's index (no frames read)."""
+    return np.bincount(segment_labels(store, _segments(store, "train").segments), minlength=labels)
 
 
 def _posterior_fit(loaded, device=None) -> dict[str, np.ndarray]:
@@ -228,12 +230,16 @@ def _posterior_fit(loaded, device=None) -> dict[str, np.ndarray]:
     return fit
 
 
+def check_latent(latent: str) -> None:
+    if latent not in LATENTS:
+        raise InputError(f"--latent must be one of {', '.join(LATENTS)}, got {latent!r}")
+
+
 def label_latents(loaded, latent: str, *, device=None) -> tuple[torch.Tensor, torch.Tensor] | None:
     """What ``MotionCVAE.sample`` draws Z from for ``latent`` (see the module docstring): None for
     ``prior``; for ``posterior`` the per-label fit of :func:`fit_latents`, cached beside the
     checkpoint (``<checkpoint>.latents.npz``, refitted when the checkpoint changes)."""
-    if latent not in LATENTS:
-        raise InputError(f"--latent must be one of {', '.join(LATENTS)}, got {latent!r}")
+    check_latent(latent)
     if latent == "prior":
         return None
     fit = _posterior_fit(loaded, device)
@@ -360,8 +366,7 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
         raise InputError(f"--out {out} is a file; give a directory for the motions")
     if not out.parent.is_dir():
         raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
-    if latent not in LATENTS:
-        raise InputError(f"--latent must be one of {', '.join(LATENTS)}, got {latent!r}")
+    check_latent(latent)  # before the checkpoint is loaded
     loaded = load_motion(run)
     poses, trans, fps = sample_sequences(loaded, label, count, seed, device=device, frames=frames, latent=latent)
     _, meta, ckpt, _ = loaded
@@ -402,7 +407,7 @@ def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "c
     if frames is not None and not 1 <= frames <= 100000:
         raise InputError(f"--frames must be between 1 and 100000, got {frames}")
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
-    counts = label_segment_counts(loaded, device=dev)
+    counts = train_label_counts(loaded[3], len(labels))
     if counts[labels.index(label)] == 0:
         seen = [name for name, c in zip(labels, counts) if c > 0]
         raise InputError(f"label {label!r} had no training segments in this run (its scenes all failed or its "
