@@ -5,6 +5,8 @@
 #   OUT=/tmp/o PHASE=train bash ...   the motion generator at λ_KL = 1e-5 (the paper's), 1e-4 and 1e-3,
 #       and without the vertex loss (Table 8), and the garment regressor per template (skirt, tshirt,
 #       pants) with the learned and a zero BOS (Table 9), all on the GPU at once
+#       (MAXMIN=M: M minutes each instead of the configs'; MOTIONS='motion' GARMENTS='': the generator alone,
+#       alone on the GPU instead of beside six other runs)
 #   OUT=/tmp/o PHASE=more TOTAL=16 bash ...   every run of PHASE=train resumed for another command, to
 #       TOTAL minutes of training in all (repeat with a larger TOTAL)
 #   OUT=/tmp/o PHASE=eval bash ...    the validation split picks the KL weight and the latent (prior or
@@ -15,8 +17,9 @@
 # one command makes (docs/training.md's runs). Each phase writes many files into $OUT: where only a few files come back from a machine, tar $OUT.
 set -o pipefail
 OUT=${OUT:-/tmp/pm-out}; STORE=${STORE:-/tmp/pm/paper-motion.zarr}; RUNS=${RUNS:-/tmp/pm/runs}
-PHASE=${PHASE:-gen}; LIMIT=${LIMIT:-8.5}; GARMENTS=${GARMENTS:-skirt tshirt pants}
-MOTIONS="motion motion_kl1e-4 motion_kl1e-3 motion_novl"; DEV=${DEV:-cuda}
+PHASE=${PHASE:-gen}; LIMIT=${LIMIT:-8.5}; GARMENTS=${GARMENTS-skirt tshirt pants}
+MOTIONS=${MOTIONS:-motion motion_kl1e-3 motion_novl}  # motion_kl1e-4 too, where the GPU has room
+DEV=${DEV:-cuda}
 SOURCE=${CONFIG:---preset paper-motion}  # CONFIG=FILE: another dataset config
 mkdir -p "$OUT" "$(dirname "$STORE")" "$RUNS"
 D="python -m datagen.cli"
@@ -34,12 +37,15 @@ gen)
 train|more)  # more: another command for every run of train, to TOTAL minutes in all (Lightning's timer
   # counts the minutes already trained; the plateau schedule and early stopping carry on where they were)
   if [ "$PHASE" = more ]; then common="--data $STORE --device $DEV --resume --max-minutes ${TOTAL:-16}"
-  else common="--data $STORE --device $DEV --force"; fi
+  else common="--data $STORE --device $DEV --force${MAXMIN:+ --max-minutes $MAXMIN}"; fi
   tm() { $D train motion $common --out "$RUNS/$1" --config "$2" $3 > "$OUT/${PHASE}_$1.log" 2>&1; }
-  tm motion benchmarks/configs/motion_paper.yaml &
-  tm motion_kl1e-4 benchmarks/configs/motion_paper_kl1e-4.yaml &
-  tm motion_kl1e-3 benchmarks/configs/motion_paper_kl1e-3.yaml &
-  tm motion_novl benchmarks/configs/motion_paper.yaml --no-vertex-loss &
+  for r in $MOTIONS; do  # motion: the paper's; motion_klX: λ_KL = X; motion_novl: without L_V^B
+    case $r in
+      motion_novl) tm $r benchmarks/configs/motion_paper.yaml --no-vertex-loss & ;;
+      motion_kl*) tm $r "benchmarks/configs/motion_paper_${r#motion_}.yaml" & ;;
+      *) tm $r benchmarks/configs/motion_paper.yaml & ;;
+    esac
+  done
   for g in $GARMENTS; do
     $D train garment $common --garment $g --out "$RUNS/$g" --config benchmarks/configs/garment_paper.yaml > "$OUT/${PHASE}_$g.log" 2>&1 &
     $D train garment $common --garment $g --zero-bos --out "$RUNS/${g}_zero_bos" --config benchmarks/configs/garment_paper.yaml > "$OUT/${PHASE}_${g}_zero_bos.log" 2>&1 &
@@ -52,10 +58,11 @@ train|more)  # more: another command for every run of train, to TOTAL minutes in
 eval)
   ev() { $D evaluate "$RUNS/$1" --split $2 --device $DEV --json "$OUT/eval_${1}_$2.json" $3 > "$OUT/eval_${1}_$2.log" 2>&1; }
   # 1. the validation split chooses the KL weight and where Z is drawn from (lowest generated FID)
-  for r in motion motion_kl1e-4 motion_kl1e-3; do ev $r val "--repetitions 10" & done
+  CHOICES=$(for r in $MOTIONS; do [ "$r" != motion_novl ] && echo $r; done)
+  for r in $CHOICES; do ev $r val "--repetitions 10" & done
   for g in $GARMENTS; do ev $g test & ev ${g}_zero_bos test & done
   wait
-  read -r best latent < <(python benchmarks/choose_motion_run.py "$OUT" motion motion_kl1e-4 motion_kl1e-3 | tee "$OUT/choice.txt" | tail -1)
+  read -r best latent < <(python benchmarks/choose_motion_run.py "$OUT" $CHOICES | tee "$OUT/choice.txt" | tail -1)
   best=${best:-motion}; latent=${latent:-posterior}
   echo "chosen on the validation split: $best, latent $latent"; cat "$OUT/choice.txt"
   # 2. the test split for every motion run; the refinement and samples from the chosen one

@@ -10,7 +10,9 @@ A run directory::
 
     RUN/
       run.json                 model kind, resolved training config, the store it trained on
-      checkpoints/last.ckpt    the last epoch (resume), best.ckpt (lowest validation error)
+      checkpoints/last.ckpt    the full state for resuming, written at an epoch's end at most once a
+                               minute (LAST_CHECKPOINT_SECONDS) and at the run's last epoch; best.ckpt
+                               the weights of the lowest validation error
       logs/tensorboard/        TensorBoard event files
       logs/csv/attempt-K/metrics.csv   the same scalars as CSV, one file per start (a resumed run
                                appends an attempt; :func:`read_metrics` joins them)
@@ -35,6 +37,12 @@ log = logging.getLogger(__name__)
 
 RUN_FILE = "run.json"
 
+
+LAST_CHECKPOINT_SECONDS = 60.0
+"""The resume checkpoint is written at most this often (and always at the run's last epoch): paper
+001's models take 12 optimiser steps an epoch on a coarse store, and writing their 150 MB of weights
+and Adam moments after each such epoch cost more than the steps (eight runs on one GPU wrote about
+1 GB/s). A killed run loses at most this much training."""
 
 RESUME_MAY_CHANGE = ("epochs", "max_minutes")
 """Config keys a resumed run may change: it may be given more epochs or more time."""
@@ -138,6 +146,31 @@ def _throughput_callback():
     return Throughput()
 
 
+def _latest_checkpoint(dirpath: Path, seconds: float):
+    """A ``ModelCheckpoint`` named ``last`` that saves at an epoch's end when ``seconds`` have passed
+    since its last save, when the run stops (max epochs, time limit, early stopping), and at the
+    first epoch."""
+    from pytorch_lightning.callbacks import ModelCheckpoint
+
+    class Latest(ModelCheckpoint):
+        def __init__(self):
+            # saved at the training epoch's end, after that epoch's validation (and early stopping's
+            # decision, which ``should_stop`` carries) rather than at validation's end
+            super().__init__(dirpath=dirpath, filename="last", enable_version_counter=False,
+                             save_on_train_epoch_end=True)
+            self._saved_at: float | None = None
+
+        def on_train_epoch_end(self, trainer, pl_module):
+            now = time.monotonic()
+            final = trainer.should_stop or trainer.current_epoch + 1 >= (trainer.max_epochs or 0)
+            if self._saved_at is not None and now - self._saved_at < seconds and not final:
+                return
+            self._saved_at = now
+            super().on_train_epoch_end(trainer, pl_module)
+
+    return Latest()
+
+
 def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, device: str = "auto",
         resume: bool = False, monitor: str = "val/detail_mm", distributed_sampler: bool = True) -> dict[str, Any]:
     """Train ``module`` with Lightning; returns the best validation value and the checkpoint paths.
@@ -158,9 +191,10 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
     world = int(os.environ.get("WORLD_SIZE", "1"))  # torchrun: one process per device
     precision = config.precision if config.precision != "auto" else ("bf16-mixed" if accelerator == "gpu" else "32")
     best = ModelCheckpoint(dirpath=out / "checkpoints", filename="best", monitor=monitor, mode="min",
-                           enable_version_counter=False)
-    # every epoch's end, whatever the score (Lightning's save_last writes only when a best one is written)
-    latest = ModelCheckpoint(dirpath=out / "checkpoints", filename="last", enable_version_counter=False)
+                           enable_version_counter=False, save_weights_only=True)
+    # at an epoch's end, whatever the score, at most once a minute and at the end (Lightning's
+    # save_last writes only when a best one is written)
+    latest = _latest_checkpoint(out / "checkpoints", LAST_CHECKPOINT_SECONDS)
     throughput = _throughput_callback()
     trainer = pl.Trainer(
         max_epochs=config.epochs, accelerator=accelerator,
