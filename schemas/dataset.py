@@ -1,4 +1,4 @@
-"""Schema of drape's dataset store (version 4): every group and array of the packed zarr v3 store
+"""Schema of drape's dataset store (version 5): every group and array of the packed zarr v3 store
 with its symbolic shape, dtype, unit and meaning, the table whose rows its first axis runs over,
 and every required root attribute. ``datagen.store`` writes, reads and validates against this
 module and nothing else; ``docs/store.md`` explains it in prose.
@@ -6,7 +6,8 @@ module and nothing else; ``docs/store.md`` explains it in prose.
 A *sample* is one simulated scene: one garment instance on one body doing one motion, with ``T``
 recorded frames of ``V`` garment vertices (``V`` differs per garment instance, ``T`` per sample) over
 ``T_sim >= T`` simulated frames (settle and lead-in included). A failed scene is a sample too: ``T = 0``
-(no frame data), a nonzero ``failure`` code, and its per-simulation-frame metrics.
+(no frame data), a nonzero ``failure`` code, and its per-simulation-frame metrics; its motion's poses
+stay in ``motions/pose`` and ``motions/trans``, written for every motion of the config.
 
 Packed, ragged per-sample data are concatenated over (sample, frame, vertex) into flat *tables*
 indexed by offset arrays (``index/frame_start``, ``index/vertex_row_start``,
@@ -23,12 +24,15 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-DATASET_SCHEMA_VERSION = 4
-"""4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored (they come from
+DATASET_SCHEMA_VERSION = 5
+"""5: every motion's recorded poses and translations (``motions/pose``, ``motions/trans``), whether
+its scenes passed or failed, so that a motion model learns every motion of the config. 4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored (they come from
 :mod:`datagen.geometry.features`), the subdivided body's topology stored, the fit attribute optional.
 3: the code version recorded. 2: the slip metric."""
 
 REFUSED_VERSIONS: dict[int, str] = {
+    4: "version 4 kept the poses of passed samples only (no motions/pose, motions/trans): a motion whose scenes "
+       "all failed was lost to the motion generator",
     3: "version 3 stored the derived arrays (body vertices, anchors, normals, skinning features, joint distances) "
        "that version 4 derives on read, and positions as float32",
     2: "version 2 had no code version",
@@ -171,6 +175,7 @@ DIMENSIONS: dict[str, str] = {
     "Fb": "body triangles",
     "n_bodies": "bodies (shape vectors)",
     "M": "motions",
+    "T_m": "recorded frames of every motion (the config's frames)",
     "G": "garment instances",
     "n_garment_vertices": "garment-instance vertices over all instances (sum of V)",
     "n_garment_faces": "garment-instance triangles over all instances (sum of F)",
@@ -303,6 +308,11 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
     _static("motions/label", ("M",), "int32", "code", "label of each motion", codes="label_names", minimum=-1),
     _static("motions/seed", ("M",), "int32", "1", "seed the motion was generated with"),
     _static("motions/frame_count", ("M",), "int32", "count", "frames of the motion", minimum=0),
+    _static("motions/pose", ("M", "T_m", "J", 3), "float32", "rad",
+            "joint rotations (axis-angle, root first) of each motion's recorded frames (a sample's frames/pose are its first T), "
+            "written for every motion whether its samples passed or failed"),
+    _static("motions/trans", ("M", "T_m", 3), "float32", "m",
+            "root translation of each motion's recorded frames (a sample's frames/trans are its first T)"),
     # --- garment instances: per instance [G], per vertex [n_garment_vertices], per face [n_garment_faces]
     _static("garments/vertex_start", ("G+1",), "int64", "row",
             "instance g's vertices are rows vertex_start[g]:vertex_start[g+1]", table="offset"),

@@ -13,7 +13,11 @@ recomputes them. A dataset pickles without open handles, so DataLoader workers (
   detail − coarse (eq. 9), the attributes (α, β, θ) of the parser, and what evaluation needs
   (anchor, coarse, detail, trans, ids). torch_geometric's ``DataLoader`` batches garments of
   different vertex counts.
-- :class:`SegmentDataset`: a dict of tensors per segment of ``segment_length`` frames (paper 001).
+- :class:`SegmentDataset`: a dict of tensors per segment of ``segment_length`` frames of a passed
+  sample (paper 001's garment regressor: poses and the garment's vertices).
+- :class:`MotionSegmentDataset`: a dict of tensors per segment of a motion of the split, from the
+  store's motion tables, whether that motion's scenes passed or failed (paper 001's motion
+  generator: poses only).
 """
 
 from __future__ import annotations
@@ -127,4 +131,28 @@ class SegmentDataset(torch.utils.data.Dataset):
         out["garment"] = torch.tensor(int(s["garment"]))
         out["body"] = torch.tensor(int(s["body"]))
         out["sample"] = torch.tensor(int(s["sample"]))
+        return out
+
+
+class MotionSegmentDataset(torch.utils.data.Dataset):
+    """Segments of the motions of one split (paper 001's motion generator), from ``motions/pose``
+    and ``motions/trans`` (:meth:`DatasetStore.motion_segments`): ``pose`` [T, 24, 3], ``trans``
+    [T, 3], ``label`` [T], ``motion`` and ``body`` (whose shape the vertex loss poses); with
+    ``labelled`` only the motions of a label (>= 0; unlabelled mocap is -1)."""
+
+    def __init__(self, store: str | Path | DatasetStore, split: str, *, labelled: bool = True):
+        self.store = store if isinstance(store, DatasetStore) else open_store(store)
+        rows = self.store.motion_segments(split)
+        labels = self.store.motions()["label"][rows[:, 0]] if len(rows) else np.zeros(0, np.int64)
+        self.rows = rows[labels >= 0] if labelled else rows
+        self.labels = (labels[labels >= 0] if labelled else labels).astype(np.int64)
+
+    def __len__(self) -> int:
+        return len(self.rows)
+
+    def __getitem__(self, k: int) -> dict[str, torch.Tensor]:
+        s = self.store.motion_segment(*(int(v) for v in self.rows[k]))
+        out = {n: torch.from_numpy(np.ascontiguousarray(s[n])) for n in ("pose", "trans", "label")}
+        out["motion"] = torch.tensor(s["motion"])
+        out["body"] = torch.tensor(s["body"])
         return out

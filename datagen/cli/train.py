@@ -188,8 +188,8 @@ def _cmd_train_motion(args) -> int:
     print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments; "
           f"best validation loss {result['best']:.4f} ({result['best_checkpoint']})")
     if result["labels_without_training_segments"]:
-        print(f"warning: no training segments of {', '.join(result['labels_without_training_segments'])} (their "
-              "scenes failed or their motions are not in the train split): the generator has not learned them and "
+        print(f"warning: no training segments of {', '.join(result['labels_without_training_segments'])} (no motion "
+              "of the train split has that label): the generator has not learned them and "
               "`drape sample motion` refuses them")
     return _diverged(result, config)
 

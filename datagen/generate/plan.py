@@ -150,6 +150,10 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
     motion_arrays = {"label": np.array([mo.label for mo in motions], np.int32),
                      "seed": np.array([parse_motion(s)[1] for s in plan.motions], np.int32),
                      "frame_count": np.array([mo.frame_count for mo in motions], np.int32)}
+    # every motion's recorded frames, whatever its scenes do: the motion generator's data (schema 5)
+    rec = plan.run_config.recorded_motion_frames(plan.config.frames, plan.config.fps)
+    motion_arrays["pose"] = np.stack([np.asarray(mo.poses, f32).reshape(mo.frame_count, -1, 3)[rec] for mo in motions])
+    motion_arrays["trans"] = np.stack([np.asarray(mo.trans, f32).reshape(mo.frame_count, 3)[rec] for mo in motions])
     garments = []
     t0 = time.perf_counter()
     for g in range(len(plan.instances)):  # built (or read from the garment cache) one by one: say so

@@ -81,6 +81,12 @@ class RunConfig:
         (the one place this is worked out: generate, ``drape simulate`` and the benchmarks ask)."""
         return int(recorded) + self.ramp_frames(fps)[1]
 
+    def recorded_motion_frames(self, recorded: int, fps: float) -> slice:
+        """The frames of a scene's motion (as :meth:`motion_frames` counts them) that its ``recorded``
+        frames play: those after the ramp's (:func:`simulate` records the body at exactly these)."""
+        first = self.ramp_frames(fps)[1]
+        return slice(first, first + int(recorded))
+
     def phases(self, recorded: int, fps: float) -> dict[str, int]:
         """Simulated frames of each phase of a scene recording ``recorded`` frames (as
         :func:`frame_schedule` runs them): ``settle_rest``, ``lead_in``, ``settle_pose``, ``ramp``

@@ -183,6 +183,7 @@ class DatasetStore:
         self._index: dict[str, np.ndarray] | None = None
         self._bindings: dict[int, Any] = {}  # garment instance -> GarmentBinding
         self._body: dict[str, np.ndarray] | None = None
+        self._motion_cache: tuple[np.ndarray, np.ndarray] | None = None
         self._shapes: dict[int, Any] = {}
 
     def __repr__(self) -> str:
@@ -425,6 +426,42 @@ class DatasetStore:
         seg = self.index["segments"]
         return np.flatnonzero(self.index["split"][seg[:, 0]] == SPLIT_NAMES.index(name)) if len(seg) else seg[:, 0]
 
+    def motion_segments(self, name: str) -> np.ndarray:
+        """(motion, body, first frame) of every ``segment_length``-frame segment of the motions that
+        split ``name``'s samples play, once per (motion, body) pair and whether those samples passed
+        or failed, [n, 3] int64 in (motion, body, frame) order: paper 001's motion generator learns
+        from these (a motion whose every scene failed is still data for it). A motion that samples
+        of several splits play is counted in each (give ``split_disjoint: [motions]`` to keep its
+        segments out of the other splits)."""
+        if name not in SPLIT_NAMES:
+            raise InputError(f"unknown split {name!r}; splits are {list(SPLIT_NAMES)}")
+        idx = self.index
+        mask = idx["split"] == SPLIT_NAMES.index(name)
+        pairs = np.unique(np.stack([idx["motion"][mask], idx["body"][mask]], axis=1).astype(np.int64), axis=0)
+        L, T = self.segment_length, int(self._motion_frames()[0].shape[1])
+        starts = np.arange(0, T - L + 1, L, dtype=np.int64)
+        return np.concatenate([np.repeat(pairs.reshape(-1, 2), len(starts), axis=0),
+                               np.tile(starts, len(pairs))[:, None]], axis=1).reshape(-1, 3)
+
+    def motion_segment(self, motion: int, body: int, first_frame: int) -> dict[str, Any]:
+        """One row of :meth:`motion_segments`: ``pose`` [L, J, 3], ``trans`` [L, 3], ``label`` [L]
+        (the motion's), and ``motion``, ``body``, ``first_frame``."""
+        m, b, t0 = int(motion), int(body), int(first_frame)
+        sl = slice(t0, t0 + self.segment_length)
+        pose, trans = self._motion_frames()
+        if not (0 <= m < len(pose) and 0 <= b < len(self.betas()) and 0 <= t0 and sl.stop <= pose.shape[1]):
+            raise IndexError(f"motion segment ({m}, {b}, {t0}) is outside the store's {len(pose)} motions of "
+                             f"{pose.shape[1]} frames and {len(self.betas())} bodies")
+        label = int(self.motions()["label"][m])
+        return {"pose": pose[m, sl], "trans": trans[m, sl], "label": np.full(self.segment_length, label, np.int32),
+                "motion": m, "body": b, "first_frame": t0}
+
+    def _motion_frames(self) -> tuple[np.ndarray, np.ndarray]:
+        """``motions/pose`` and ``motions/trans``, read once per reader (a few MB)."""
+        if self._motion_cache is None:
+            self._motion_cache = (self.rows.read_all("motions/pose"), self.rows.read_all("motions/trans"))
+        return self._motion_cache
+
     def segment(self, k: int, *, names: Sequence[str] | None = None) -> dict[str, Any]:
         """Segment ``k``: :meth:`frames` of its ``segment_length`` frames, the sample's scalars, and
         ``sample`` and ``first_frame``."""
@@ -499,7 +536,8 @@ class DatasetStore:
         return self.rows.read_all("bodies/betas")
 
     def motions(self) -> dict[str, np.ndarray]:
-        """Motion tables: ``label``, ``seed``, ``frame_count``, each [M]."""
+        """Motion tables: ``label``, ``seed``, ``frame_count``, each [M]; ``pose`` [M, T_m, J, 3] and
+        ``trans`` [M, T_m, 3], every motion's recorded frames."""
         return self.group("motions")
 
     def fit_model(self) -> dict[str, np.ndarray]:

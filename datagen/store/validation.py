@@ -269,6 +269,8 @@ def validate(path: str | Path, *, check_values: bool = True, quick: bool = False
     checker.values(check_values)
     checker.subdivision()
     checker.samples()
+    if check_values:
+        checker.motions()
     checker.segments()
     checker.splits()
     return problems
@@ -527,6 +529,27 @@ class _Checker:
                 g = int(np.searchsorted(self.gf_start, r, side="right") - 1)
                 self.say(f"'garments/faces' row {r} (garment instance {g}, face {r - self.gf_start[g]}) has "
                          f"{faces[r].tolist()}: indices must be local to the instance (0 .. {Vg[r] - 1})")
+
+    def motions(self) -> None:
+        """Every passed sample's recorded poses and translations are its motion's (the first ``T`` of
+        ``motions/pose``, ``motions/trans``): the motion generator reads the motion tables, the
+        regressor the frames."""
+        fs, failure, motion = self.frame_start, self.get("samples/failure"), self.get("samples/motion")
+        if fs is None or failure is None or motion is None or len(fs) != len(failure) + 1:
+            return
+        for name in ("pose", "trans"):
+            table, frames = self.get(f"motions/{name}"), self.get(f"frames/{name}")
+            if table is None or frames is None:
+                continue
+            for i in np.flatnonzero(failure == 0):
+                m, t0, t1 = int(motion[i]), int(fs[i]), int(fs[i + 1])
+                if not 0 <= m < len(table) or t1 - t0 > table.shape[1]:
+                    continue  # out-of-range motions and frame counts are reported by the checks above
+                if not np.array_equal(frames[t0:t1], table[m, :t1 - t0]):
+                    self.say(f"sample {i}: frames/{name} differs from motions/{name}[{m}] (its motion's recorded "
+                             "frames); the motion generator and the regressor would read different poses")
+                    if len(self.problems) > 50:
+                        return
 
     def segments(self) -> None:
         seg = self.get("index/segments")

@@ -720,6 +720,9 @@ class _PackPlan:
             lo, hi = m["ranges"].get("label", (0, 0))
             if hi >= n_labels:
                 problems.append(f"sample {i}: label code {hi} but label_names has {n_labels} names")
+            if m["dims"]["T"] > sizes["motions"]["T_m"]:
+                problems.append(f"sample {i}: T = {m['dims']['T']} recorded frames but motions/pose holds only "
+                                f"{sizes['motions']['T_m']} per motion; stage the motions with the config's frames")
             if len(problems) > 30:
                 break
         _raise(problems, "Nothing was packed.")

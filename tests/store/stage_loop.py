@@ -50,7 +50,7 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
     bodies = {"betas": rng.normal(size=(n_bodies, S)).astype(f32)}
     M = 4
     motions = {"label": np.array([0, 1, 2, 1], np.int32), "seed": np.arange(M, dtype=np.int32) + 100,
-               "frame_count": np.array([50, 60, 70, 80], np.int32)}
+               "frame_count": np.array([50, 60, 70, 80], np.int32), **motion_frames()}
     V, F = np.array(garment_vertices), np.array(garment_faces)
     nv, nf = int(V.sum()), int(F.sum())
     garments = {
@@ -80,6 +80,17 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
     }
 
 
+MOTION_FRAMES = 8
+"""Recorded frames of every motion (``motions/pose``): a sample records the first ``T`` of them."""
+
+
+def motion_frames() -> dict[str, np.ndarray]:
+    """``pose`` [M, MOTION_FRAMES, 24, 3] and ``trans`` [M, MOTION_FRAMES, 3] of the four motions."""
+    rng = np.random.default_rng([SEED, 998])
+    return {"pose": rng.normal(scale=0.3, size=(4, MOTION_FRAMES, 24, 3)).astype(np.float32),
+            "trans": rng.normal(size=(4, MOTION_FRAMES, 3)).astype(np.float32)}
+
+
 def sample(i: int, garment_vertices=GARMENT_VERTICES, body_vertices=BODY_VERTICES, frames: int | None = None
            ) -> tuple[dict, dict]:
     """(arrays, scalars) of sample ``i``: split i % 3 uses garment, body and motion i % 3 (disjoint
@@ -96,8 +107,9 @@ def sample(i: int, garment_vertices=GARMENT_VERTICES, body_vertices=BODY_VERTICE
     if not failed:
         for name in ("detail", "coarse"):
             arrays[name] = rng.normal(size=(T, V, 3)).astype(f32)
-        arrays["pose"] = rng.normal(scale=0.3, size=(T, J, 3)).astype(f32)
-        arrays["trans"] = rng.normal(size=(T, 3)).astype(f32)
+        mo = motion_frames()
+        arrays["pose"] = mo["pose"][split, :T]  # its motion's (motion i % 3) first T recorded frames
+        arrays["trans"] = mo["trans"][split, :T]
         arrays["joints"] = rng.normal(size=(T, J, 3)).astype(f32)
         arrays["label"] = np.full(T, split, np.int32)
     arrays |= {"metric_stretch_max": rng.random(T_sim).astype(f32),

@@ -235,20 +235,65 @@ def test_validate_passes_and_pinpoints_corruption(packed, tmp_path):
     assert any(p.startswith("array 'fit/mean' is missing") for p in problems), problems
 
 
-def test_an_older_schema_is_refused_with_how_to_make_it_again(packed, tmp_path):
-    """A schema-3 store (float positions and derived arrays stored) is refused by the reader, validate
-    and info, each saying why and the command that makes it again; the config is still printable."""
+def test_motion_segments_hold_every_motion_of_a_split_failed_samples_included(packed):
+    """Paper 001's generator reads motions, not samples: every (motion, body) pair a split plays, once,
+    from motions/pose, whether its samples passed or failed; a passed sample's frames are its motion's."""
+    store = open_store(packed)
+    mo = sl.motion_frames()
+    L, T_m = sl.SEGMENT_LENGTH, sl.MOTION_FRAMES
+    for k, split in enumerate(("train", "val", "test")):  # split k plays motion k on body k (stage_loop)
+        rows = store.motion_segments(split)
+        assert rows.tolist() == [[k, k, t0] for t0 in range(0, T_m - L + 1, L)]
+        for m, b, t0 in rows[[0, -1]]:
+            seg = store.motion_segment(m, b, t0)
+            assert np.array_equal(seg["pose"], mo["pose"][m, t0:t0 + L]) and np.array_equal(
+                seg["trans"], mo["trans"][m, t0:t0 + L])
+            assert seg["label"].tolist() == [store.motions()["label"][m]] * L and seg["body"] == b
+    # sample 5 (val: motion 1) failed, yet motion 1's segments are all there; its passed samples agree
+    assert 5 in sl.FAILED and len(store.motion_segments("val")) == T_m // L
+    for i in range(N):
+        if i not in sl.FAILED:
+            f = store.frames(i, names=["pose"])["pose"]
+            assert np.array_equal(f, mo["pose"][i % 3, :len(f)])
+    with pytest.raises(IndexError, match="outside the store's 4 motions"):
+        store.motion_segment(4, 0, 0)
+    with pytest.raises(InputError, match="unknown split"):
+        store.motion_segments("training")
+
+
+def test_validate_finds_frames_that_are_not_their_motions(tmp_path):
+    """A sample whose recorded poses are not its motion's (motions/pose) is reported by validate."""
+    path = tmp_path / "ds"
+    writer = sl.open_writer(path, N, durable=False)
+    for group, (arrays, names) in sl.static_groups().items():
+        writer.stage_static(group, arrays, names)
+    for i in writer.missing():
+        arrays, scalars = sl.sample(i)
+        if i == 4:
+            arrays["pose"] = arrays["pose"] + np.float32(0.1)
+        writer.stage_sample(i, arrays, scalars)
+    assert writer.pack()
+    problems = validate(path)
+    assert problems == ["sample 4: frames/pose differs from motions/pose[1] (its motion's recorded frames); the "
+                        "motion generator and the regressor would read different poses"]
+
+
+@pytest.mark.parametrize("version, why", [(3, "derives on read"), (4, "poses of passed samples only")])
+def test_an_older_schema_is_refused_with_how_to_make_it_again(packed, tmp_path, version, why):
+    """A schema-3 store (float positions and derived arrays stored) and a schema-4 store (no motion
+    tables of poses) are refused by the reader, validate and info, each saying why and the command
+    that makes it again; the config is still printable."""
     import zarr
 
-    old = tmp_path / "v3"
+    old = tmp_path / f"v{version}"
     shutil.copytree(packed, old)
     meta = json.loads((old / "zarr.json").read_text())
-    meta["attributes"]["schema_version"] = 3
+    meta["attributes"]["schema_version"] = version
     (old / "zarr.json").write_text(json.dumps(meta))
     with pytest.raises(InputError) as exc:
         open_store(old)
     message = str(exc.value)
-    assert "has schema version 3; this drape reads version 4" in message and "derives on read" in message
+    assert f"has schema version {version}; this drape reads version 5" in message and why in message
     assert f"drape info {old} --config > config.yaml && drape generate config.yaml --out NEW" in message
     assert validate(old) == [message]
     info = store_info(old)

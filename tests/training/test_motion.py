@@ -232,27 +232,26 @@ def test_sted_is_zero_for_rigid_motion_and_grows_with_stretch():
 
 
 def test_each_body_motion_counts_once_whatever_the_garments(train_store):
-    """The micro store's train split simulates walk:0 on two bodies under two garments (8 segments);
-    the poses of a motion on a body are the same under every garment, so the generator keeps one
-    segment per (motion, body, first frame): 4, every key of the split once."""
+    """The micro store's train split simulates walk:0 on two bodies under two garments (8 sample
+    segments); the generator reads the motion tables instead: one segment per (motion, body, first
+    frame), 4, every key of the split once, with the poses and translations the samples recorded."""
     from datagen.store import open_store
     from training.motion.run import _segments
 
     store = open_store(train_store)
     every = store.split_segments("train")
-    kept = _segments(store, "train").segments
+    ds = _segments(store, "train")
     idx, seg = store.index, store.index["segments"]
 
     def key(k):
         return int(idx["motion"][seg[k, 0]]), int(idx["body"][seg[k, 0]]), int(seg[k, 1])
 
-    assert len(every) == 8 and len(kept) == 4
-    assert sorted(map(key, kept)) == sorted(set(map(key, every)))
-    groups: dict = {}
-    for k in every:
-        groups.setdefault(key(k), []).append(int(k))
-    assert all(len(g) == 2 for g in groups.values())  # each key under both garments
-    for g in groups.values():  # which hold the same poses
-        a, b = (store.segment(k, names=("pose",))["pose"] for k in g)
-        assert idx["garment"][seg[g[0], 0]] != idx["garment"][seg[g[1], 0]]
-        np.testing.assert_array_equal(a, b)
+    assert len(every) == 8 and len(ds) == 4
+    assert sorted(map(tuple, ds.rows.tolist())) == sorted(set(map(key, every)))
+    for k in every:  # each sample segment (under either garment) holds its motion segment's poses
+        m, b, t0 = key(k)
+        got = ds[[tuple(r) for r in ds.rows.tolist()].index((m, b, t0))]
+        sample = store.segment(int(k), names=("pose", "trans", "label"))
+        for name in ("pose", "trans", "label"):
+            np.testing.assert_array_equal(got[name].numpy(), sample[name])
+        assert int(got["body"]) == b

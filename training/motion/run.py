@@ -1,7 +1,9 @@
 """Train, evaluate and sample paper 001's motion generator from a store's 60-frame segments.
 
-- :func:`train_motion`: the train split's labelled segments (``label >= 0``: unlabelled mocap is
-  skipped), the checkpoint chosen on the validation split's loss, through the shared loop.
+- :func:`train_motion`: the labelled segments (``label >= 0``: unlabelled mocap is skipped) of the
+  train split's motions, from the store's motion tables (every motion of the config, whether its
+  scenes passed or failed), the checkpoint chosen on the validation split's loss, through the
+  shared loop.
 - :func:`evaluate_motion`: Table 3's reconstruction figures on a split's unseen segments (the
   posterior mean decoded): RMSE of the pose parameters (axis-angle, rad) and of the body vertices
   (m), the Hausdorff distance between predicted and true vertex sets (m, mean over frames), STED
@@ -29,7 +31,7 @@ import torch
 
 from datagen.errors import InputError
 from datagen.store import open_store
-from training.data import SegmentDataset
+from training.data import MotionSegmentDataset
 from training.loop import fit, prepare_run, resolve_device, run_checkpoint, seed_everything
 from training.motion.config import MotionConfig
 
@@ -38,31 +40,22 @@ LATENTS = ("posterior", "prior")
 
 
 def segment_labels(store, segments: np.ndarray) -> np.ndarray:
-    """The label of each segment: its sample's motion's label (one label per motion), from the
-    store's index and motion table, without reading frames."""
+    """The label of each (sample) segment: its sample's motion's label (one label per motion), from
+    the store's index and motion table, without reading frames."""
     sample = store.index["segments"][np.asarray(segments, dtype=np.int64), 0]
     return store.motions()["label"][store.index["motion"][sample]]
 
 
-def _labelled(ds: SegmentDataset) -> SegmentDataset:
-    """Keep the segments with a label (paper 001 trains on labelled motions; unlabelled mocap is -1),
-    each body motion once: a store simulates every motion under several garments (``paper-motion``:
-    a skirt, a T-shirt and pants), whose segments hold the same poses; counting them thrice would
-    weight the motions whose three garments all passed and make the test sets three copies."""
-    seg = ds.segments[segment_labels(ds.store, ds.segments) >= 0]
-    idx = ds.store.index
-    rows = idx["segments"][seg]
-    key = np.stack([idx["motion"][rows[:, 0]], idx["body"][rows[:, 0]], rows[:, 1]], axis=1)
-    _, first = np.unique(key, axis=0, return_index=True)
-    ds.segments = seg[np.sort(first)]
-    return ds
-
-
-def _segments(store, split: str) -> SegmentDataset:
-    ds = _labelled(SegmentDataset(store, split, names=("pose", "trans", "label")))
+def _segments(store, split: str) -> MotionSegmentDataset:
+    """The labelled segments of the split's motions, once per (motion, body), whether their scenes
+    passed or failed: paper 001 trains on labelled motions (unlabelled mocap is -1), and a store
+    simulates every motion under several garments (``paper-motion``: a skirt, a T-shirt and pants)
+    whose segments hold the same poses; counting those would weight the motions whose garments
+    passed and lose those whose garments all failed."""
+    ds = MotionSegmentDataset(store, split)
     if not len(ds):
-        raise InputError(f"the {split} split of {store.path} has no labelled segments (label >= 0); the motion "
-                         "generator learns labelled motions")
+        raise InputError(f"the {split} split of {store.path} has no labelled motion segments (label >= 0); the "
+                         "motion generator learns labelled motions")
     return ds
 
 
@@ -207,8 +200,8 @@ def fit_latents(module, store, device=None) -> dict[str, np.ndarray]:
 
 
 def train_label_counts(store, labels: int) -> np.ndarray:
-    """Labelled training segments per label [labels], from the store's index (no frames read)."""
-    return np.bincount(segment_labels(store, _segments(store, "train").segments), minlength=labels)
+    """Labelled training segments per label [labels], from the store's index and motion table."""
+    return np.bincount(_segments(store, "train").labels, minlength=labels)
 
 
 def _posterior_fit(loaded, device=None) -> dict[str, np.ndarray]:
@@ -306,7 +299,7 @@ def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
             "frames": counts["frames"], "vertex_stride": meta["config"]["vertex_stride"], **out}
 
 
-def _mean_poses(ds: SegmentDataset, labels: int) -> torch.Tensor:
+def _mean_poses(ds: MotionSegmentDataset, labels: int) -> torch.Tensor:
     """Each label's mean axis-angle pose [labels, 24, 3] over the segments of ``ds`` (zeros if absent)."""
     sums, counts = torch.zeros(labels, 24, 3), torch.zeros(labels)
     for k in range(len(ds)):
