@@ -39,7 +39,7 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     from training.loop import RUN_FILE, resolve_device
     from training.motion.model import frames_to_features
     from training.motion.module import BodyLayer
-    from training.motion.run import load_motion, sample_sequences, segment_labels
+    from training.motion.run import load_motion, sample_sequences, train_label_counts
 
     if samples < 2 or steps < 1:
         raise InputError(f"--samples must be 2 or more and --steps 1 or more, got {samples} and {steps}")
@@ -60,8 +60,8 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     faces = torch.as_tensor(np.asarray(store.body_model()["faces"], dtype=np.int64), device=dev)
     rng = np.random.default_rng(seed)
     labels = motion_meta["labels"]
-    trained = sorted({int(x) for x in segment_labels(store, store.split_segments("train"))})
-    choices = [labels[k] for k in trained if k >= 0] or labels
+    # the labels the generator learned (its training motions', whether their scenes passed or failed)
+    choices = [labels[k] for k, c in enumerate(train_label_counts(store, len(labels))) if c > 0] or labels
 
     def sample_set(n: int, base_seed: int):
         sets = []

@@ -39,13 +39,6 @@ KIND = "motion"
 LATENTS = ("posterior", "prior")
 
 
-def segment_labels(store, segments: np.ndarray) -> np.ndarray:
-    """The label of each (sample) segment: its sample's motion's label (one label per motion), from
-    the store's index and motion table, without reading frames."""
-    sample = store.index["segments"][np.asarray(segments, dtype=np.int64), 0]
-    return store.motions()["label"][store.index["motion"][sample]]
-
-
 def _segments(store, split: str) -> MotionSegmentDataset:
     """The labelled segments of the split's motions, once per (motion, body), whether their scenes
     passed or failed: paper 001 trains on labelled motions (unlabelled mocap is -1), and a store
