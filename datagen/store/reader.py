@@ -183,7 +183,7 @@ class DatasetStore:
         self._index: dict[str, np.ndarray] | None = None
         self._bindings: dict[int, Any] = {}  # garment instance -> GarmentBinding
         self._body: dict[str, np.ndarray] | None = None
-        self._motion_cache: tuple[np.ndarray, np.ndarray] | None = None
+        self._motion_cache: tuple[np.ndarray, np.ndarray, np.ndarray, int] | None = None
         self._shapes: dict[int, Any] = {}
 
     def __repr__(self) -> str:
@@ -438,7 +438,7 @@ class DatasetStore:
         idx = self.index
         mask = idx["split"] == SPLIT_NAMES.index(name)
         pairs = np.unique(np.stack([idx["motion"][mask], idx["body"][mask]], axis=1).astype(np.int64), axis=0)
-        L, T = self.segment_length, int(self._motion_frames()[0].shape[1])
+        L, T = self.segment_length, int(self._motion_tables()[0].shape[1])
         starts = np.arange(0, T - L + 1, L, dtype=np.int64)
         return np.concatenate([np.repeat(pairs.reshape(-1, 2), len(starts), axis=0),
                                np.tile(starts, len(pairs))[:, None]], axis=1).reshape(-1, 3)
@@ -448,18 +448,21 @@ class DatasetStore:
         (the motion's), and ``motion``, ``body``, ``first_frame``."""
         m, b, t0 = int(motion), int(body), int(first_frame)
         sl = slice(t0, t0 + self.segment_length)
-        pose, trans = self._motion_frames()
-        if not (0 <= m < len(pose) and 0 <= b < len(self.betas()) and 0 <= t0 and sl.stop <= pose.shape[1]):
+        pose, trans, labels, n_bodies = self._motion_tables()
+        if not (0 <= m < len(pose) and 0 <= b < n_bodies and 0 <= t0 and sl.stop <= pose.shape[1]):
             raise IndexError(f"motion segment ({m}, {b}, {t0}) is outside the store's {len(pose)} motions of "
-                             f"{pose.shape[1]} frames and {len(self.betas())} bodies")
-        label = int(self.motions()["label"][m])
-        return {"pose": pose[m, sl], "trans": trans[m, sl], "label": np.full(self.segment_length, label, np.int32),
+                             f"{pose.shape[1]} frames and {n_bodies} bodies")
+        return {"pose": pose[m, sl], "trans": trans[m, sl], "label": np.full(self.segment_length, labels[m], np.int32),
                 "motion": m, "body": b, "first_frame": t0}
 
-    def _motion_frames(self) -> tuple[np.ndarray, np.ndarray]:
-        """``motions/pose`` and ``motions/trans``, read once per reader (a few MB)."""
+    def _motion_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+        """``motions/pose``, ``motions/trans``, ``motions/label`` and the body count, read once per
+        reader (a few MB): a segment is then a slice in memory (on the coarse paper-motion store,
+        reading the tables per segment held the generator's training at ~220 segments/s)."""
         if self._motion_cache is None:
-            self._motion_cache = (self.rows.read_all("motions/pose"), self.rows.read_all("motions/trans"))
+            r = self.rows
+            self._motion_cache = (r.read_all("motions/pose"), r.read_all("motions/trans"),
+                                  r.read_all("motions/label"), len(r.read_all("bodies/betas")))
         return self._motion_cache
 
     def segment(self, k: int, *, names: Sequence[str] | None = None) -> dict[str, Any]:
