@@ -6,7 +6,8 @@
 #       and without the vertex loss (Table 8), and the garment regressor per template (skirt, tshirt,
 #       pants) with the learned and a zero BOS (Table 9), all on the GPU at once
 #       (MAXMIN=M: M minutes each instead of the configs'; MOTIONS='motion' GARMENTS='': the generator alone,
-#       alone on the GPU instead of beside six other runs)
+#       alone on the GPU instead of beside six other runs; STORE=DIR with PHASE=train|eval: an existing store,
+#       e.g. one of benchmarks/configs/paper_motion_motions_only.yaml made on a CPU, for the generator alone)
 #   OUT=/tmp/o PHASE=more TOTAL=16 bash ...   every run of PHASE=train resumed for another command, to
 #       TOTAL minutes of training in all (repeat with a larger TOTAL)
 #   OUT=/tmp/o PHASE=eval bash ...    the validation split picks the KL weight and the latent (prior or
