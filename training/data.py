@@ -143,7 +143,7 @@ class MotionSegmentDataset(torch.utils.data.Dataset):
     def __init__(self, store: str | Path | DatasetStore, split: str, *, labelled: bool = True):
         self.store = store if isinstance(store, DatasetStore) else open_store(store)
         rows = self.store.motion_segments(split)
-        labels = self.store.motions()["label"][rows[:, 0]] if len(rows) else np.zeros(0, np.int64)
+        labels = self.store.motion_labels()[rows[:, 0]] if len(rows) else np.zeros(0, np.int64)
         self.rows = rows[labels >= 0] if labelled else rows
         self.labels = (labels[labels >= 0] if labelled else labels).astype(np.int64)
 

@@ -455,6 +455,10 @@ class DatasetStore:
         return {"pose": pose[m, sl], "trans": trans[m, sl], "label": np.full(self.segment_length, labels[m], np.int32),
                 "motion": m, "body": b, "first_frame": t0}
 
+    def motion_labels(self) -> np.ndarray:
+        """``motions/label`` [M], read once per reader (as :meth:`motion_segment` reads it)."""
+        return self._motion_tables()[2]
+
     def _motion_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
         """``motions/pose``, ``motions/trans``, ``motions/label`` and the body count, read once per
         reader (a few MB): a segment is then a slice in memory, where reading the tables per segment

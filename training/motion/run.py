@@ -163,15 +163,14 @@ def label_gaussians(mu: torch.Tensor, logvar: torch.Tensor, label: torch.Tensor,
     """Each label's Gaussian over posteriors (μ, log σ²) [N, d] of classes ``label`` [N]: ``mean``
     [labels, d] (mean of μ), ``std`` [labels, d] (sqrt of the variance of μ plus the mean σ², per
     dimension) and ``count`` [labels]; a label without segments gets N(0, I)."""
-    mu, sig2 = mu.double(), logvar.double().exp()
+    mu, sig2, label = mu.double().cpu(), logvar.double().exp().cpu(), label.cpu()
     d = mu.shape[1]
     mean, std = torch.zeros(labels, d, dtype=torch.float64), torch.ones(labels, d, dtype=torch.float64)
-    count = torch.bincount(label.cpu(), minlength=labels)
+    count = torch.bincount(label, minlength=labels)
     for k in torch.nonzero(count).flatten().tolist():
-        rows = label.cpu() == k
-        m = mu.cpu()[rows]
-        mean[k] = m.mean(0)
-        std[k] = (m.var(0, unbiased=False) + sig2.cpu()[rows].mean(0)).sqrt()
+        rows = label == k
+        mean[k] = mu[rows].mean(0)
+        std[k] = (mu[rows].var(0, unbiased=False) + sig2[rows].mean(0)).sqrt()
     return {"mean": mean.float().numpy(), "std": std.float().numpy(), "count": count.numpy()}
 
 
@@ -270,16 +269,18 @@ def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
         candidates = {"model": (matrix_to_axis_angle(prot), prot, ptrans),
                       "mean_pose_baseline": (label_mean, axis_angle_to_matrix(label_mean), x[..., -3:]),
                       "own_mean_pose": (own_mean, axis_angle_to_matrix(own_mean), x[..., -3:])}
-        v_true = module.vertices(rot, x[..., -3:], body)
+        keep = module.body.keep  # the vertex metrics' vertices (every vertex_stride-th) of the whole mesh
         t_full = posed(rot, x[..., -3:], body)
+        v_true = t_full[:, :, keep]
         flat = (B * T, -1, 3)
         for name, (aa, r, tr) in candidates.items():
-            v = module.vertices(r, tr, body)
+            full_mesh = posed(r, tr, body)  # posed once: STED on all of it, the other metrics on ``keep``
+            v = full_mesh[:, :, keep]
             acc = sums[name]
             acc["pose_sq"] += float(((aa - pose_true) ** 2).sum())
             acc["vertex_sq"] += float(((v - v_true) ** 2).sum())
             acc["hausdorff"] += float(hausdorff(v.reshape(flat), v_true.reshape(flat)).sum())
-            acc["sted"] += float(sted(posed(r, tr, body), t_full, edges)["sted"].sum())
+            acc["sted"] += float(sted(full_mesh, t_full, edges)["sted"].sum())
         counts["pose"] += pose_true.numel()
         counts["vertex"] += v_true.numel()
         counts["frames"] += B * T
@@ -396,9 +397,8 @@ def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "c
     counts = train_label_counts(loaded[3], len(labels))
     if counts[labels.index(label)] == 0:
         seen = [name for name, c in zip(labels, counts) if c > 0]
-        raise InputError(f"label {label!r} had no training segments in this run (its scenes all failed or its "
-                         f"motions were not in the train split), so the generator cannot make it; it learned: "
-                         f"{', '.join(seen)}")
+        raise InputError(f"label {label!r} had no training segments in this run (no motion of the store's train "
+                         f"split has it), so the generator cannot make it; it learned: {', '.join(seen)}")
     fitted = label_latents(loaded, latent, device=dev)
     module.to(dev)
     g = torch.Generator().manual_seed(int(seed))
