@@ -270,6 +270,15 @@ def run_scenes(args) -> None:
     with open(args.inputs, "rb") as fh:
         d = pickle.load(fh)
     scenes, names = d["scenes"], d["names"]
+    if args.material:
+        import dataclasses
+
+        from datagen.config import parse_assignments
+
+        kw = parse_assignments(args.material)
+        scenes = [dataclasses.replace(sc, garment=dataclasses.replace(
+            sc.garment, material=dataclasses.replace(sc.garment.material, **kw))) for sc in scenes]
+        print(f"every garment's material with {kw}")
     lead_in = RunConfig().lead_in if args.lead_in is None else args.lead_in
     config = RunConfig(lead_in=lead_in, freeze_failed=args.freeze_failed,
                        solver=SolverConfig(self_collision=not args.no_self_collision,
@@ -307,7 +316,7 @@ def run_scenes(args) -> None:
         if out:
             np.savez_compressed(out / f"{name.replace('/', '_')}.npz",
                                 **{f"metric_{k}": v for k, v in r.metrics.items()}, recorded_from=r.recorded_from,
-                                positions=r.positions[::10])
+                                positions=r.positions[::10], body=r.body_vertices[::10])
 
 
 def main() -> None:
@@ -363,6 +372,8 @@ def main() -> None:
                    help="conjugate-gradient iterations of the global step (default: SolverConfig's; 0: sweeps alone)")
     p.add_argument("--out-dir", default=None, help="per-scene metrics (.npz) go here")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a SolverConfig field (repeatable)")
+    p.add_argument("--material", action="append", default=[], metavar="KEY=VALUE",
+                   help="a Material field set on every scene's garment (repeatable; a sweep)")
     p.set_defaults(func=run_scenes)
     args = ap.parse_args()
     args.func(args)

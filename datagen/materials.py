@@ -33,8 +33,12 @@ sample:
   linear triangles lock in shear, so a fold that needs the cloth to shear is held by its 20 N/m
   (at 5 N/m the disc drapes at 0.37, inside silk's range, but the silk dress walking then sheared
   its triangles to 410 % and crossed itself: ``docs/bench/six_runs_refit_silkshear4_h100.txt``).
-  Silk keeps its 20 N/m and drapes too stiffly (0.48 against 0.2-0.4) until the membrane is
-  discretised without that locking.
+  Silk keeps its 20 N/m. What lets it fold is the buckling branch (2026-11-26): a light silk
+  buckles under almost no compressive load, into folds far finer than 1.5 cm triangles, so its
+  triangles must be nearly free to shorten; at ``buckling_ratio`` 0.1 it drapes at 0.350 (1.5 cm
+  edges) and 0.391 (1.0 cm), against 0.459 and 0.450 with the linear law (0.5: 0.391, 0.2: 0.379,
+  0.05: 0.351; ``docs/bench/cusick_buckling_cpu.txt``). The other presets keep the linear law
+  (ratio 1): they drape inside their ranges with it, and were fitted with it.
 - Breaking: ``max_strain`` is the stretch gate. Woven apparel fabrics break at 10-45 % elongation
   in strip tests (ISO 13934-1; cotton and silk shirting 10-25 %, denim 15-25 %, polyester and wool
   20-40 %): a triangle of a woven stretched by more than 50 % is torn cloth or a simulation
@@ -76,6 +80,13 @@ class Material:
         max_strain: the largest principal strain [-] a triangle of this fabric may reach before
             the simulation is failed (``stretch``): beyond the fabric's breaking elongation the
             cloth would have torn, so such a frame is a simulation artefact, not data.
+        buckling_ratio: the membrane's stretch stiffness under compression, as a fraction of its
+            stiffness in tension [-], per material direction (1: the linear law, as stiff in
+            compression as in tension). Cloth compressed in its plane buckles at once, into folds
+            finer than a garment's triangles can show; those triangles must shorten instead, and a
+            membrane as stiff in compression as in tension holds a drape that the real fabric
+            makes (Choi and Ko 2002, "Stable but responsive cloth": the post-buckling response;
+            Marvelous Designer's "buckling ratio" is the same setting).
     """
 
     name: str
@@ -91,6 +102,7 @@ class Material:
     lock_strain: float = 0.3
     lock_ratio: float = 20.0
     max_strain: float = 1.0
+    buckling_ratio: float = 1.0
 
     def __post_init__(self):
         if not self.max_strain > 0:
@@ -99,8 +111,23 @@ class Material:
             raise InputError(f"material {self.name!r}: lock_strain must be > 0 and lock_ratio >= 0, got "
                              f"{self.lock_strain} and {self.lock_ratio}")
 
+        if not 0 < self.buckling_ratio <= 1:
+            raise InputError(f"material {self.name!r}: buckling_ratio must be in (0, 1] (compression as a fraction "
+                             f"of the tension stiffness), got {self.buckling_ratio}")
+
     def as_dict(self) -> dict:
         return asdict(self)
+
+    @property
+    def poisson_coupling(self) -> float:
+        """k_uv = ν sqrt(k_u k_v) [N/m], the membrane law's coupling of its two stretches."""
+        return self.poisson * (self.stretch_weft * self.stretch_warp) ** 0.5
+
+    def warp_uniaxial_stiffness(self) -> float:
+        """The stiffness [N/m] of a strip pulled along the warp with its sides free: k_v - r k_uv²/k_u.
+        The weft contracts under the Poisson coupling (k_uv/k_u of the warp's Green strain), which
+        is compression, so its stiffness and the coupling are on the buckling branch (x r each)."""
+        return self.stretch_warp - self.buckling_ratio * self.poisson_coupling ** 2 / self.stretch_weft
 
 
 MATERIALS: dict[str, Material] = {
@@ -111,7 +138,8 @@ MATERIALS: dict[str, Material] = {
     "jersey": Material(name="jersey", density=0.18, stretch_warp=120.0, stretch_weft=60.0, shear=15.0,
                        poisson=0.45, bending=3.0e-6, friction=0.4, thickness=0.0015, max_strain=1.0),
     "silk": Material(name="silk", density=0.07, stretch_warp=900.0, stretch_weft=700.0, shear=20.0,
-                     poisson=0.3, bending=5.0e-7, friction=0.3, thickness=0.001, max_strain=0.5),
+                     poisson=0.3, bending=5.0e-7, friction=0.3, thickness=0.001, max_strain=0.5,
+                     buckling_ratio=0.1),
     "polyester": Material(name="polyester", density=0.15, stretch_warp=2500.0, stretch_weft=2000.0, shear=80.0,
                           poisson=0.3, bending=3.0e-6, friction=0.35, thickness=0.0015, max_strain=0.5),
     "wool": Material(name="wool", density=0.30, stretch_warp=1500.0, stretch_weft=1000.0, shear=70.0,

@@ -9,6 +9,9 @@ Energies (per element, SI units; see ``docs/simulator.md``):
   v): ``A [k_u/2 G_uu² + k_v/2 G_vv² + k_uv G_uu G_vv + 2 k_s G_uv²]`` with the Green strain
   ``G = (FᵀF - I)/2``, stiffnesses in N/m, ``k_uv = ν sqrt(k_u k_v)``, A the triangle's rest area
   (of its reference shape, ``tri_area`` = |det Dm|/2: the energy is an integral over the rest shape);
+  a direction in compression (G_uu or G_vv below zero) is on the buckling branch: its stiffness
+  and the coupling times the material's buckling ratio r (:func:`buckled_stiffness`; the energy
+  stays continuous with a continuous gradient in that direction, and positive definite in G);
 - bending: discrete shells (Grinspun et al. 2003) on each interior edge,
   ``k_b/2 · 3|ē|²/(Ā₁+Ā₂) · (θ - θ̄)²`` with the rest angle θ̄ of the rest shape, k_b in N·m;
 - inertia ``m/(2h²)|x - y|²`` with ``y = x₀ + h v₀ + h² (g - c_air v₀ / ρ)``;
@@ -35,6 +38,23 @@ from __future__ import annotations
 import warp as wp
 
 from datagen.sim.detection_kernels import are_neighbours, triangle_closest_bary
+
+vec5 = wp.types.vector(length=5, dtype=float)
+"""A triangle's membrane law: (k_u, k_v, k_uv, k_s [N/m], buckling ratio r [-])."""
+
+
+@wp.func
+def buckled_stiffness(k: vec5, g00: float, g11: float) -> wp.vec4:
+    """(k_u, k_v, k_uv, k_s) at Green strains G_uu = ``g00``, G_vv = ``g11``: a direction in
+    compression has its stiffness times r, and the coupling is times r for each compressed
+    direction (so k_uv² <= k_u k_v still holds and the energy stays convex in G)."""
+    ru = float(1.0)
+    rv = float(1.0)
+    if g00 < 0.0:
+        ru = k[4]
+    if g11 < 0.0:
+        rv = k[4]
+    return wp.vec4(k[0] * ru, k[1] * rv, k[2] * ru * rv, k[3])
 
 
 @wp.func
@@ -302,7 +322,7 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
 @wp.func
 def membrane_force_hessian(i: int, local: int, f: int, x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                            faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                           tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                           tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
                            tri_lock: wp.array(dtype=wp.vec2), damping: float, h: float):
     """Force and Hessian block on corner ``local`` of face ``f`` (orthotropic StVK and the lock,
     see module doc)."""
@@ -318,14 +338,14 @@ def membrane_force_hessian(i: int, local: int, f: int, x: wp.array(dtype=wp.vec3
         c = wp.vec2(D[0, 0], D[0, 1])
     elif local == 2:
         c = wp.vec2(D[1, 0], D[1, 1])
-    k = tri_stiff[f]
+    g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
+    g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
+    g01 = 0.5 * wp.dot(f0, f1)
+    k = buckled_stiffness(tri_stiff[f], g00, g11)
     ku = k[0]
     kv = k[1]
     kuv = k[2]
     ks = k[3]
-    g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
-    g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
-    g01 = 0.5 * wp.dot(f0, f1)
     s00 = ku * g00 + kuv * g11
     s11 = kv * g11 + kuv * g00
     s01 = 2.0 * ks * g01
@@ -582,7 +602,7 @@ def solve_colour(
     faces: wp.array2d(dtype=wp.int32),
     dm_inv: wp.array(dtype=wp.mat22),
     tri_area: wp.array(dtype=float),
-    tri_stiff: wp.array(dtype=wp.vec4),
+    tri_stiff: wp.array(dtype=vec5),
     tri_lock: wp.array(dtype=wp.vec2),
     edges: wp.array2d(dtype=wp.int32),
     rest_angle: wp.array(dtype=float),

@@ -149,7 +149,7 @@ def principal_strain(rest_vertices: np.ndarray, faces: np.ndarray, positions: np
 
 def elastic_energy(host, x: np.ndarray) -> float:
     """The cloth's stored elastic energy [J] at positions ``x`` [N, 3] (m): the membrane's
-    orthotropic StVK and lock energies and the hinges' bending energy, as the solver's kernels
+    orthotropic StVK (with its buckling branch) and lock energies and the hinges' bending energy, as the solver's kernels
     define them, from a model's host arrays (:class:`~datagen.sim.model.ClothHostArrays`).
 
     With the kinetic energy and the work of gravity it makes the mechanical energy balance that a
@@ -163,7 +163,11 @@ def elastic_energy(host, x: np.ndarray) -> float:
     a, b, c = (f0 * f0).sum(1), (f1 * f1).sum(1), (f0 * f1).sum(1)
     g00, g11, g01 = 0.5 * (a - 1), 0.5 * (b - 1), 0.5 * c
     k = host.tri_stiff
-    psi = 0.5 * k[:, 0] * g00**2 + 0.5 * k[:, 1] * g11**2 + k[:, 2] * g00 * g11 + 2 * k[:, 3] * g01**2
+    # a compressed direction is on the buckling branch: its stiffness and the coupling x r
+    ru = np.where(g00 < 0, k[:, 4], 1.0)
+    rv = np.where(g11 < 0, k[:, 4], 1.0)
+    psi = (0.5 * ru * k[:, 0] * g00**2 + 0.5 * rv * k[:, 1] * g11**2 + ru * rv * k[:, 2] * g00 * g11
+           + 2 * k[:, 3] * g01**2)
     # the lock: kA/2 Σ (λ - λ_lock)² over the principal stretches above λ_lock
     mean, rad = 0.5 * (a + b), np.sqrt(0.25 * (a - b) ** 2 + c**2)
     lam = np.sqrt(np.maximum(np.stack([mean + rad, mean - rad], 1), 0.0))

@@ -73,7 +73,8 @@ class ClothHostArrays:
     """Rest area [m²], [F]: the area of the reference shape, |det Dm|/2 = built area x weft scale;
     the membrane energy's weight (its integral over the reference shape). Mass is the built area's."""
     tri_stiff: np.ndarray
-    """(k_u, k_v, k_uv, k_s) [N/m], [F, 4]: weft, warp, Poisson coupling, shear."""
+    """(k_u, k_v, k_uv, k_s [N/m], r [-]), [F, 5]: weft, warp, Poisson coupling, shear, and the
+    buckling ratio (a compressed direction's stiffness, and the coupling, times r)."""
     tri_lock: np.ndarray
     """(1 + lock strain [-], lock stiffness [N/m]), [F, 2]: the material's lock."""
     # bending
@@ -181,7 +182,7 @@ class ClothModel:
     tri_area: wp.array
     """Rest (reference) area |det Dm|/2 = built area x weft scale [m²], float [F]: the membrane's weight."""
     tri_stiff: wp.array
-    """(k_u, k_v, k_uv, k_s) [N/m], vec4 [F]."""
+    """(k_u, k_v, k_uv, k_s [N/m], buckling ratio r [-]), vec5 [F] (:data:`datagen.sim.kernels.vec5`)."""
     tri_lock: wp.array
     """(1 + lock strain [-], lock stiffness [N/m]), vec2 [F]."""
     # bending
@@ -463,7 +464,7 @@ def _membrane(g: _Gathered) -> _Membrane:
                    np.stack([np.einsum("ij,ij->i", e1, warp_dir), np.einsum("ij,ij->i", e2, warp_dir)], 1)], 1)
     Dm[:, 0, :] *= g.weft_scale[:, None]  # a shrunk weft: the rest shape is shorter around the body
     dm_inv = np.linalg.inv(Dm)  # F(x) = Ds Dm⁻¹ with Ds = [x1 - x0, x2 - x0]
-    stiff = np.array([[m.stretch_weft, m.stretch_warp, m.poisson * np.sqrt(m.stretch_weft * m.stretch_warp), m.shear]
+    stiff = np.array([[m.stretch_weft, m.stretch_warp, m.poisson_coupling, m.shear, m.buckling_ratio]
                       for m in mats])[fm]
     lock = np.array([[1.0 + m.lock_strain, m.lock_ratio * max(m.stretch_weft, m.stretch_warp)] for m in mats])[fm]
     dens = np.array([m.density for m in mats])[fm]
@@ -540,6 +541,8 @@ def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_with
     """The :class:`ClothModel` on ``device``: every warp array uploaded from ``host`` (float32, int32)."""
     import warp as wp
 
+    from datagen.sim.kernels import vec5
+
     h = host
     with wp.ScopedDevice(device):
         f32 = lambda a, dt=float: wp.array(np.asarray(a, dtype=np.float32), dtype=dt)
@@ -551,7 +554,7 @@ def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_with
             rest_positions=f32(h.rest_positions, wp.vec3), mass=f32(h.mass), vertex_area=f32(h.vertex_area),
             active=i32(h.active), particle_scene=i32(h.particle_scene), damping=f32(h.damping),
             friction=f32(h.friction), faces=i32(h.faces), dm_inv=f32(h.dm_inv, wp.mat22), tri_area=f32(h.tri_area),
-            tri_stiff=f32(h.tri_stiff, wp.vec4), tri_lock=f32(h.tri_lock, wp.vec2), edges=i32(h.edges),
+            tri_stiff=f32(h.tri_stiff, vec5), tri_lock=f32(h.tri_lock, wp.vec2), edges=i32(h.edges),
             edge_pairs=i32(h.edge_pairs), rest_angle=f32(h.rest_angle), bend_k=f32(h.bend_k),
             v2f_offsets=i32(h.v2f_offsets), v2f=i32(h.v2f), v2e_offsets=i32(h.v2e_offsets), v2e=i32(h.v2e),
             nbr_offsets=i32(h.nbr_offsets), nbr=i32(h.nbr), colours=[i32(c) for c in h.colours],

@@ -35,8 +35,9 @@ from __future__ import annotations
 
 import warp as wp
 
-from datagen.sim.kernels import (bending_force_hessian, contact_force_hessian, friction_force_hessian, friction_limit,
-                                 friction_part, hinge_gradients, lock_force_hessian, membrane_force_hessian, stencil_pick)
+from datagen.sim.kernels import (bending_force_hessian, buckled_stiffness, contact_force_hessian, friction_force_hessian,
+                                 friction_limit, friction_part, hinge_gradients, lock_force_hessian,
+                                 membrane_force_hessian, stencil_pick, vec5)
 
 
 @wp.func
@@ -76,7 +77,7 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
                           inertia_target: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
                           active: wp.array(dtype=wp.int32), damping: wp.array(dtype=float),
                           faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                          tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                          tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
                           tri_lock: wp.array(dtype=wp.vec2), edges: wp.array2d(dtype=wp.int32),
                           rest_angle: wp.array(dtype=float), bend_k: wp.array(dtype=float),
                           v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
@@ -170,16 +171,19 @@ def _membrane_frame(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32
 
 
 @wp.func
-def _membrane_stress(f0: wp.vec3, f1: wp.vec3, k: wp.vec4) -> wp.mat22:
+def _membrane_law(f0: wp.vec3, f1: wp.vec3, law: vec5):
+    """The stiffnesses (k_u, k_v, k_uv, k_s) at this deformation (the buckling branch applied) and
+    the PSD-projected 2nd Piola stress."""
     g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
     g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
     g01 = 0.5 * wp.dot(f0, f1)
-    return _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
+    k = buckled_stiffness(law, g00, g11)
+    return k, _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
 
 
 @wp.kernel
 def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
                      edges: wp.array2d(dtype=wp.int32), bend_k: wp.array(dtype=float),
                      damping: wp.array(dtype=float), h: float,
                      v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
@@ -194,8 +198,7 @@ def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
         f = v2f[n, 0]
         D = dm_inv[f]
         f0, f1 = _membrane_frame(x, faces, D, f)
-        k = tri_stiff[f]
-        S = _membrane_stress(f0, f1, k)
+        k, S = _membrane_law(f0, f1, tri_stiff[f])
         c = _corner_weights(D, v2f[n, 1])
         a = f0 * c[0]
         b = f1 * c[1]
@@ -216,7 +219,7 @@ def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
 
 @wp.kernel
 def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=wp.vec4),
+                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
                      damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3),
                      out: wp.array2d(dtype=wp.vec3)):
     """Each triangle's share of H_membrane p at its three corners, ``out[f, corner]`` (gathered per
@@ -227,8 +230,7 @@ def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
     i2 = faces[f, 2]
     D = dm_inv[f]
     f0, f1 = _membrane_frame(x, faces, D, f)
-    k = tri_stiff[f]
-    S = _membrane_stress(f0, f1, k)
+    k, S = _membrane_law(f0, f1, tri_stiff[f])
     A = tri_area[f] * (1.0 + damping[i0] / h)
     c0 = _corner_weights(D, 0)
     c1 = _corner_weights(D, 1)

@@ -243,10 +243,10 @@ def hang_preset_strip(mat: Material, config: SolverConfig):
 
 def preset_strip_exact(mat: Material) -> float:
     """The static elongation of the 50 cm strip: 1-D StVK with the warp stiffness less the law's
-    Poisson coupling, k_v - k_uv²/k_u (the strip's free edges carry no lateral stress, so it
-    contracts across; the pinned top row, 5 of 50 cm, is stiffer: neglected)."""
-    kuv = mat.poisson * np.sqrt(mat.stretch_weft * mat.stretch_warp)
-    return stvk_strip_elongation(mat.stretch_warp - kuv**2 / mat.stretch_weft, mat.density, 0.5)
+    Poisson coupling, k_v - r k_uv²/k_u (the strip's free edges carry no lateral stress, so it
+    contracts across, on the buckling branch r; :meth:`Material.warp_uniaxial_stiffness`; the
+    pinned top row, 5 of 50 cm, is stiffer: neglected)."""
+    return stvk_strip_elongation(mat.warp_uniaxial_stiffness(), mat.density, 0.5)
 
 
 @pytest.mark.parametrize("name", list(MATERIALS))
