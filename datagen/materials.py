@@ -33,12 +33,18 @@ sample:
   linear triangles lock in shear, so a fold that needs the cloth to shear is held by its 20 N/m
   (at 5 N/m the disc drapes at 0.37, inside silk's range, but the silk dress walking then sheared
   its triangles to 410 % and crossed itself: ``docs/bench/six_runs_refit_silkshear4_h100.txt``).
-  Silk keeps its 20 N/m. What lets it fold is the buckling branch (2026-11-26): a light silk
-  buckles under almost no compressive load, into folds far finer than 1.5 cm triangles, so its
-  triangles must be nearly free to shorten; at ``buckling_ratio`` 0.1 it drapes at 0.350 (1.5 cm
-  edges) and 0.391 (1.0 cm), against 0.459 and 0.450 with the linear law (0.5: 0.391, 0.2: 0.379,
-  0.05: 0.351; ``docs/bench/cusick_buckling_cpu.txt``). The other presets keep the linear law
-  (ratio 1): they drape inside their ranges with it, and were fitted with it.
+  Silk keeps its 20 N/m. What lets it fold is the buckling branch (2026-11-26).
+- Buckling: every woven preset has ``buckling_ratio`` 0.1. A fabric compressed in its plane buckles at
+  once: its bending length sqrt(B/k) is 0.03-0.22 mm for these presets, so its folds start far
+  finer than a garment's 1.5 cm triangles, which must shorten instead, nearly freely. With the
+  linear law (ratio 1) a triangle resisted shortening as hard as stretching: silk draped at 0.459
+  (range 0.2-0.4), and garments strained where they had to fold (the walking silk dress p99 13.7 %,
+  the pants 14.0 %). At 0.1 silk drapes at 0.350 (0.391 at 1.0 cm edges) and the other five stay
+  in their ranges with the bending above (cotton 0.504, denim 0.672, polyester 0.477, wool 0.645;
+  ``docs/bench/cusick_buckling_cpu.txt``). Jersey keeps the linear law (ratio 1; DC 0.408): at 0.1
+  (DC 0.376) its T-shirts folded more finely than the self-contact holds, and the walking T-shirt,
+  which passes with the linear law, crossed itself (56 crossings at frame 77, limit 50). The knit
+  buckles too; what is missing there is the self-contact's hold on fine folds, not the law.
 - Breaking: ``max_strain`` is the stretch gate. Woven apparel fabrics break at 10-45 % elongation
   in strip tests (ISO 13934-1; cotton and silk shirting 10-25 %, denim 15-25 %, polyester and wool
   20-40 %): a triangle of a woven stretched by more than 50 % is torn cloth or a simulation
@@ -132,18 +138,17 @@ class Material:
 
 MATERIALS: dict[str, Material] = {
     "cotton": Material(name="cotton", density=0.13, stretch_warp=1800.0, stretch_weft=1200.0, shear=60.0,
-                       poisson=0.3, bending=3.5e-6, friction=0.45, thickness=0.0015, max_strain=0.5),
+                       poisson=0.3, bending=3.5e-6, friction=0.45, thickness=0.0015, max_strain=0.5, buckling_ratio=0.1),
     "denim": Material(name="denim", density=0.40, stretch_warp=6000.0, stretch_weft=3500.0, shear=200.0,
-                      poisson=0.25, bending=2.0e-5, friction=0.5, thickness=0.0025, max_strain=0.5),
+                      poisson=0.25, bending=2.0e-5, friction=0.5, thickness=0.0025, max_strain=0.5, buckling_ratio=0.1),
     "jersey": Material(name="jersey", density=0.18, stretch_warp=120.0, stretch_weft=60.0, shear=15.0,
                        poisson=0.45, bending=3.0e-6, friction=0.4, thickness=0.0015, max_strain=1.0),
     "silk": Material(name="silk", density=0.07, stretch_warp=900.0, stretch_weft=700.0, shear=20.0,
-                     poisson=0.3, bending=5.0e-7, friction=0.3, thickness=0.001, max_strain=0.5,
-                     buckling_ratio=0.1),
+                     poisson=0.3, bending=5.0e-7, friction=0.3, thickness=0.001, max_strain=0.5, buckling_ratio=0.1),
     "polyester": Material(name="polyester", density=0.15, stretch_warp=2500.0, stretch_weft=2000.0, shear=80.0,
-                          poisson=0.3, bending=3.0e-6, friction=0.35, thickness=0.0015, max_strain=0.5),
+                          poisson=0.3, bending=3.0e-6, friction=0.35, thickness=0.0015, max_strain=0.5, buckling_ratio=0.1),
     "wool": Material(name="wool", density=0.30, stretch_warp=1500.0, stretch_weft=1000.0, shear=70.0,
-                     poisson=0.3, bending=1.5e-5, friction=0.5, thickness=0.003, max_strain=0.5),
+                     poisson=0.3, bending=1.5e-5, friction=0.5, thickness=0.003, max_strain=0.5, buckling_ratio=0.1),
 }
 """The presets, by name."""
 
