@@ -18,30 +18,9 @@ from pathlib import Path
 import numpy as np
 import warp as wp
 
-from datagen.sim.metrics import _segment_crosses
+from datagen.sim.metrics import crossings
 
 MAX_PER_EDGE = 8
-
-
-@wp.kernel
-def crossing_pairs(bvh: wp.uint64, x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32),
-                   edges: wp.array2d(dtype=wp.int32), out: wp.array2d(dtype=wp.int32)):
-    """The triangles (up to MAX_PER_EDGE) that each edge crosses, -1 after the last."""
-    e = wp.tid()
-    a = edges[e, 0]
-    b = edges[e, 1]
-    qry = wp.bvh_query_aabb(bvh, wp.min(x[a], x[b]), wp.max(x[a], x[b]))
-    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
-    n = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
-    while wp.bvh_query_next(qry, t):
-        i = faces[t, 0]
-        j = faces[t, 1]
-        k = faces[t, 2]
-        if i == a or i == b or j == a or j == b or k == a or k == b:
-            continue
-        if _segment_crosses(x[a], x[b], x[i], x[j], x[k]) and n < out.shape[1]:
-            out[e, n] = t
-            n += 1
 
 
 def frame_crossings(x: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> np.ndarray:
@@ -50,11 +29,13 @@ def frame_crossings(x: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> np.n
     tri = x[faces]
     lo = wp.array(tri.min(1).astype(np.float32), dtype=wp.vec3, device="cpu")
     hi = wp.array(tri.max(1).astype(np.float32), dtype=wp.vec3, device="cpu")
-    bvh = wp.Bvh(lo, hi)
+    bvh = wp.Bvh(lo, hi, groups=wp.zeros(len(faces), dtype=wp.int32, device="cpu"))  # one scene
+    count = wp.zeros(len(edges), dtype=wp.int32, device="cpu")
     out = wp.full((len(edges), MAX_PER_EDGE), -1, dtype=wp.int32, device="cpu")
-    wp.launch(crossing_pairs, len(edges), device="cpu",
-              inputs=[bvh.id, xs, wp.array(faces.astype(np.int32), device="cpu"),
-                      wp.array(edges.astype(np.int32), device="cpu"), out])
+    wp.launch(crossings, len(edges), device="cpu",
+              inputs=[bvh.id, xs, wp.zeros(len(x), dtype=wp.int32, device="cpu"),
+                      wp.array(faces.astype(np.int32), device="cpu"), wp.array(edges.astype(np.int32), device="cpu"),
+                      count, out])
     o = out.numpy()
     e, k = np.nonzero(o >= 0)
     return np.stack([e, o[e, k]], 1)

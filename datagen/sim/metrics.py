@@ -96,8 +96,12 @@ def _segment_crosses(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3)
 
 
 @wp.kernel
-def _crossings(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
-               out: wp.array(dtype=wp.int32)):
+def crossings(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
+              faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32), out: wp.array(dtype=wp.int32),
+              pairs: wp.array2d(dtype=wp.int32)):
+    """How many triangles of its own scene each cloth edge crosses (``out``), and the first
+    ``pairs.shape[1]`` of them (``pairs``, left as they were after the last; width 0: none kept,
+    as the per-frame metric does; ``benchmarks/crossing_regions.py`` keeps them)."""
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
@@ -111,6 +115,8 @@ def _crossings(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(
         if i == a or i == b or j == a or j == b or k == a or k == b:
             continue
         if _segment_crosses(x[a], x[b], x[i], x[j], x[k]):
+            if n < pairs.shape[1]:
+                pairs[e, n] = t
             n += 1
     out[e] = n
 
@@ -197,6 +203,7 @@ class Metrics:
         with wp.ScopedDevice(m.device):
             self._depth = wp.zeros(m.particle_count, dtype=float)
             self._cross = wp.zeros(m.edge_count, dtype=wp.int32)
+            self._no_pairs = wp.zeros((m.edge_count, 0), dtype=wp.int32)
             h = m.host
             # every scene's faces in one BVH, a group per scene (one refit per frame for the batch)
             self._lo, self._hi = wp.zeros(m.face_count, dtype=wp.vec3), wp.zeros(m.face_count, dtype=wp.vec3)
@@ -238,8 +245,8 @@ class Metrics:
             wp.launch(_inside, m.particle_count, inputs=[solver.body_ids, x_wp, m.particle_scene, self._depth])
             wp.launch(face_bounds, m.face_count, inputs=[x_wp, m.faces, self._lo, self._hi])
             self._bvh.refit()
-            wp.launch(_crossings, m.edge_count, inputs=[self._bvh.id, x_wp, m.particle_scene, m.faces,
-                                                        m.edge_pairs, self._cross])
+            wp.launch(crossings, m.edge_count, inputs=[self._bvh.id, x_wp, m.particle_scene, m.faces,
+                                                       m.edge_pairs, self._cross, self._no_pairs])
             wp.launch(_slip, m.particle_count, inputs=[x_wp, solver.body_sub, self._anchor, self._rest_d, self._slip])
         x = x_wp.numpy().astype(np.float64)
         v = state.velocities.numpy().astype(np.float64)

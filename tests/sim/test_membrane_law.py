@@ -13,22 +13,16 @@ from datagen.materials import MATERIALS, Material
 from datagen.sim.kernels import membrane_force_hessian, vec5
 from datagen.sim.metrics import elastic_energy
 from datagen.sim.model import ClothModelBuilder
+from tests.sim.meshes import grid
 
 SILK = MATERIALS["silk"]
 
 
 def patch(material: Material):
-    """A flat 4 x 4 cm patch (2 cm grid, weft along X, warp along Y) and its model on the CPU."""
-    n, dx = 3, 0.02
-    X, Y = np.meshgrid(np.arange(n) * dx, np.arange(n) * dx, indexing="ij")
-    v = np.stack([X.ravel(), Y.ravel(), np.zeros(X.size)], 1)
-    faces = []
-    for i in range(n - 1):
-        for j in range(n - 1):
-            a, b, c, d = i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1, i * n + j + 1
-            faces += [[a, b, c], [a, c, d]]
-    f = np.array(faces)
-    frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]]), (len(f), 1, 1))
+    """A flat 4 x 4 cm patch (2 cm grid in the XZ plane, weft along X, warp along Z) and its
+    model on the CPU."""
+    v, f = grid(3, 3, 0.02)
+    frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, 1.0]]), (len(f), 1, 1))
     b = ClothModelBuilder()
     b.add_cloth(v, f, material_name=material, material_frames=frames)
     return v, b.finalize("cpu")
@@ -77,13 +71,13 @@ def test_kernel_forces_are_the_energy_gradient_on_the_buckling_branch(weft, warp
     mean anything)."""
     v, model = patch(SILK)
     rng = np.random.default_rng(0)
-    x = v * np.array([weft, warp, 1.0]) + np.array([0.03, 0.0, 0.0]) * v[:, 1:2]
-    x[:, :2] += rng.normal(scale=2e-4, size=(len(x), 2))
+    x = v * np.array([weft, 1.0, warp]) + np.array([0.03, 0.0, 0.0]) * v[:, 2:3]
+    x[:, [0, 2]] += rng.normal(scale=2e-4, size=(len(x), 2))
     forces = kernel_forces(model, x)
     grad = np.zeros_like(x)
     eps = 1e-7
     for i in range(len(x)):
-        for d in range(2):  # the patch stays flat: no bending
+        for d in (0, 2):  # the patch stays flat: no bending
             xp, xm = x.copy(), x.copy()
             xp[i, d] += eps
             xm[i, d] -= eps

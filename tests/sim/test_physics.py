@@ -14,6 +14,7 @@ from datagen.materials import MATERIALS, Material
 from datagen.sim.model import ClothModelBuilder
 from datagen.sim.solver import SolverConfig, SolverVBD
 from datagen.sim.state import BodyControl, ClothState
+from tests.sim.meshes import grid
 
 G = 9.81
 FPS = 30
@@ -27,21 +28,6 @@ COTTON = Material(name="cotton-test", density=0.13, stretch_warp=1800.0, stretch
 
 # --------------------------------------------------------------------------------------------------
 # helpers
-
-
-def grid(nx: int, nz: int, dx: float, *, y: float = 0.0, centre=(0.0, 0.0)):
-    """A flat nx x nz vertex grid of spacing dx in the plane y = const, centred on (x, z) = centre,
-    two triangles per cell with normals +Y."""
-    xs = centre[0] + (np.arange(nx) - (nx - 1) / 2) * dx
-    zs = centre[1] + (np.arange(nz) - (nz - 1) / 2) * dx
-    X, Z = np.meshgrid(xs, zs, indexing="ij")
-    v = np.stack([X.ravel(), np.full(X.size, float(y)), Z.ravel()], 1)
-    faces = []
-    for i in range(nx - 1):
-        for j in range(nz - 1):
-            a, b, c, d = i * nz + j, (i + 1) * nz + j, (i + 1) * nz + j + 1, i * nz + j + 1
-            faces += [[a, d, c], [a, c, b]]
-    return v, np.array(faces)
 
 
 def plane(half: float):
