@@ -54,6 +54,18 @@ class SolverConfig:
             ``kernels.project_out_of_body``).
         projection_reach: how far the projection's search for a way out (where the closest face's
             normal does not lead outside) may move a vertex [m].
+        untangle_step: how far a vertex of a crossing of the cloth with itself moves per untangling
+            iteration [m] (0: off; at most ``self_radius``). After each substep every edge that
+            crosses a triangle pushes the two apart along the gradient that shortens their
+            intersection contour (:mod:`datagen.sim.untangle_kernels`). The contacts stay on:
+            turning them off between the vertices of crossings let a tangle spread (T-shirt dance:
+            248 crossings against 22 without untangling).
+        untangle_iterations: untangling iterations after each substep (each a refit of the cloth's
+            triangle tree and an edge query). A crossing deeper than one step is pushed back by the
+            contacts of the next substep, which hold each side where it is: with one 2 mm
+            iteration a vertex poked 1.8 mm through the back of a T-shirt stayed there for 250
+            frames; with four, the first 84 frames of the T-shirt walk and dance cross nowhere
+            (the kernels alone clear that state's 20 crossings in four iterations).
         detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
             substep); each detection renews the move bounds from the current positions, so cloth
             pressed between the body and other cloth can follow a fast body. Every 4 sweeps (five
@@ -100,6 +112,8 @@ class SolverConfig:
     chebyshev_rho: float = 0.7
     detection_interval: int = 4
     body_projection: bool = True
+    untangle_step: float = 0.002
+    untangle_iterations: int = field(default=4, metadata={"min": 1, "max": 20})
     projection_reach: float = 0.1
     body_friction: bool = True
     friction_pressure: float = 1000.0
@@ -117,6 +131,11 @@ class SolverConfig:
                 raise InputError(f"solver {name} must be > 0, got {getattr(self, name)}")
         if self.self_query <= self.self_radius:
             raise InputError(f"self_query ({self.self_query}) must exceed self_radius ({self.self_radius})")
+        if not 0.0 <= float(self.untangle_step) <= self.self_radius:
+            raise InputError(f"untangle_step must be in [0, self_radius = {self.self_radius}] m (0: off), got "
+                             f"{self.untangle_step}: a longer jump can carry cloth through other cloth")
+        if int(self.untangle_iterations) < 1:
+            raise InputError(f"untangle_iterations must be >= 1, got {self.untangle_iterations}")
         if self.global_friction not in GLOBAL_FRICTION:
             raise InputError(f"global_friction must be one of {', '.join(GLOBAL_FRICTION)}, got {self.global_friction!r}")
         if not 0.0 < self.bound_fraction < 0.5:
@@ -241,6 +260,8 @@ class SolverVBD:
             self.ee_count = wp.zeros(ne, dtype=wp.int32)
             self.needed = wp.zeros(3, dtype=wp.int32)
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
+            self.untangle_push = z3(n)
+            self.untangle_hits = wp.zeros(n, dtype=wp.int32)  # crossings each vertex is part of
         self._allocate_contacts(self.config.contact_capacity)
         self.contact_growths = 0
         self._graphs: dict[tuple, tuple] = {}
@@ -407,6 +428,26 @@ class SolverVBD:
             wp.launch(D.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
         wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.bound_fraction, c.self_bound_floor, self.bound])
 
+    def _untangle(self, x) -> None:
+        """One step of intersection contour minimisation at ``x``: every vertex of an edge-triangle
+        crossing moves ``untangle_step`` along its contour gradient (:mod:`datagen.sim.untangle_kernels`).
+        Where the cloth crosses nowhere nothing moves."""
+        import warp as wp
+
+        from datagen.sim import untangle_kernels as U
+
+        m = self.model
+        for _ in range(self.config.untangle_iterations):
+            self.untangle_push.zero_()
+            self.untangle_hits.zero_()
+            wp.launch(self.D.face_bounds, m.face_count, inputs=[x, m.faces, self.face_lo, self.face_hi])
+            self.face_bvh.refit()
+            wp.launch(U.contour_gradients, m.edge_count, inputs=[self.face_bvh.id, x, m.particle_scene, m.faces,
+                                                                 m.edges, self.scene_frozen, self.untangle_push,
+                                                                 self.untangle_hits])
+            wp.launch(U.apply_untangle, m.particle_count, inputs=[self.untangle_push, self.untangle_hits, m.active,
+                                                                  self.config.untangle_step, x])
+
     def _global_step(self, x, h: float) -> None:
         """One Newton step of the substep's incremental potential from the initial guess ``x``,
         solved by block-Jacobi preconditioned conjugate gradients (per scene), each vertex's move
@@ -525,3 +566,5 @@ class SolverVBD:
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
                             self.body_sub, 2.0 * c.body_query, self.body_radius, m.active, h, c.projection_reach, x, v,
                             self.projected])
+                if c.self_collision and c.untangle_step > 0.0:
+                    self._untangle(x)

@@ -1,0 +1,145 @@
+"""Warp kernels that undo crossings of the cloth with itself: intersection contour minimisation
+(Volino and Magnenat-Thalmann 2006, "Resolving surface collisions through intersection contour
+minimization").
+
+The contacts keep cloth from crossing itself, but once an edge has passed through a triangle (the
+end-of-substep projection out of the body can carry a vertex through another layer; a fast body
+can squeeze two layers through each other), a contact only holds each side where it now is: the
+crossing stays for good. Where two pieces of cloth cross, they meet along a curve, the
+intersection contour, and moving them so that this curve gets shorter pulls them apart until it
+vanishes. For an edge E (vertices e0, e1) through a triangle of normal N, each triangle i next to
+the edge (normal N_i) carries the contour away from the crossing along R_i = N x N_i, oriented
+into that triangle; moving the edge along
+
+    G = sum_i  R_i - 2 (E . R_i) / (E . N) N
+
+(and the triangle against it) shortens the contour (Volino's local gradient; the first term moves
+the crossing along the contour, the second slides it along the edge). The solver moves every
+vertex of a crossing a small step along the average of its unit gradients after each substep
+(``SolverConfig.untangle_step``). The contacts stay on (see that setting for why).
+
+Every array is an explicit argument; the kernels run unchanged on CPU and CUDA.
+"""
+
+from __future__ import annotations
+
+import warp as wp
+
+
+@wp.func
+def segment_triangle_parameter(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> float:
+    """Where segment pq crosses triangle abc, as the parameter along pq in [0, 1]; -1 if it does
+    not (both ends on one side, or the point outside the triangle)."""
+    n = wp.cross(b - a, c - a)
+    dp = wp.dot(p - a, n)
+    dq = wp.dot(q - a, n)
+    if dp * dq > 0.0 or dp == dq:
+        return -1.0
+    t = dp / (dp - dq)
+    r = p + (q - p) * t
+    c0 = wp.dot(wp.cross(b - a, r - a), n)
+    c1 = wp.dot(wp.cross(c - b, r - b), n)
+    c2 = wp.dot(wp.cross(a - c, r - c), n)
+    if (c0 >= 0.0 and c1 >= 0.0 and c2 >= 0.0) or (c0 <= 0.0 and c1 <= 0.0 and c2 <= 0.0):
+        return t
+    return -1.0
+
+
+@wp.func
+def contour_gradient(xa: wp.vec3, xb: wp.vec3, n_tri: wp.vec3, has0: int, o0: wp.vec3, has1: int,
+                     o1: wp.vec3) -> wp.vec3:
+    """Volino's local gradient G for edge (xa, xb) through a triangle of unit normal ``n_tri``: the
+    direction to move the edge (the triangle moves against it) that shortens the contour. ``o0``
+    and ``o1`` are the corners opposite the edge in its one or two triangles (``has0``/``has1``)."""
+    e = xb - xa
+    en = wp.dot(e, n_tri)
+    g = wp.vec3(0.0)
+    if wp.abs(en) < 1.0e-12:
+        return g
+    ee = wp.dot(e, e)
+    for side in range(2):
+        o = o0
+        has = has0
+        if side == 1:
+            o = o1
+            has = has1
+        if has != 0:
+            d = o - xa
+            w = d - e * (wp.dot(d, e) / ee)  # in the triangle, away from the edge
+            ni = wp.cross(e, d)
+            r = wp.cross(n_tri, ni)
+            rl = wp.length(r)
+            if rl > 1.0e-12:
+                r = r / rl
+                if wp.dot(r, w) < 0.0:
+                    r = -r
+                g = g + r - n_tri * (2.0 * wp.dot(e, r) / en)
+    return g
+
+
+@wp.kernel
+def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
+                      faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
+                      frozen: wp.array(dtype=wp.int32), push: wp.array(dtype=wp.vec3),
+                      hits: wp.array(dtype=wp.int32)):
+    """For every edge of the cloth (``edges`` [E, 4]: its two vertices and the corners opposite it,
+    -1 on a border) that crosses a triangle of its own scene: add the unit contour gradient to the
+    edge's two vertices' ``push`` and subtract it from the triangle's three, and count the crossing
+    at all five (``hits``; a vertex with hits > 0 is tangled)."""
+    e = wp.tid()
+    a = edges[e, 0]
+    b = edges[e, 1]
+    s = scene[a]
+    if frozen[s] != 0:
+        return
+    xa = x[a]
+    xb = x[b]
+    qry = wp.bvh_query_aabb(face_bvh, wp.min(xa, xb), wp.max(xa, xb), wp.bvh_get_group_root(face_bvh, s))
+    t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    while wp.bvh_query_next(qry, t):
+        i = faces[t, 0]
+        j = faces[t, 1]
+        k = faces[t, 2]
+        if i == a or i == b or j == a or j == b or k == a or k == b:
+            continue
+        if segment_triangle_parameter(xa, xb, x[i], x[j], x[k]) < 0.0:
+            continue
+        n = wp.cross(x[j] - x[i], x[k] - x[i])
+        nl = wp.length(n)
+        if nl < 1.0e-20:
+            continue
+        c0 = edges[e, 2]
+        c1 = edges[e, 3]
+        o0 = xa
+        o1 = xa
+        if c0 >= 0:
+            o0 = x[c0]
+        if c1 >= 0:
+            o1 = x[c1]
+        g = contour_gradient(xa, xb, n / nl, int(c0 >= 0), o0, int(c1 >= 0), o1)
+        gl = wp.length(g)
+        if gl < 1.0e-9:
+            continue
+        g = g / gl
+        wp.atomic_add(push, a, g)
+        wp.atomic_add(push, b, g)
+        wp.atomic_add(push, i, -g)
+        wp.atomic_add(push, j, -g)
+        wp.atomic_add(push, k, -g)
+        wp.atomic_add(hits, a, 1)
+        wp.atomic_add(hits, b, 1)
+        wp.atomic_add(hits, i, 1)
+        wp.atomic_add(hits, j, 1)
+        wp.atomic_add(hits, k, 1)
+
+
+@wp.kernel
+def apply_untangle(push: wp.array(dtype=wp.vec3), hits: wp.array(dtype=wp.int32), active: wp.array(dtype=wp.int32),
+                   step: float, x: wp.array(dtype=wp.vec3)):
+    """Moves every tangled vertex by ``step`` times the mean of its unit contour gradients (at
+    most ``step``)."""
+    i = wp.tid()
+    c = hits[i]
+    if c == 0 or active[i] == 0:
+        return
+    x[i] = x[i] + push[i] * (step / float(c))
