@@ -15,7 +15,7 @@ into that triangle; moving the edge along
 
 (and the triangle against it) shortens the contour (Volino's local gradient; the first term moves
 the crossing along the contour, the second slides it along the edge). The solver moves every
-vertex of a crossing a small step along the average of its unit gradients after each substep
+vertex of a crossing a small step along the average of its unit gradients before each substep
 (``SolverConfig.untangle_step``). The contacts stay on (see that setting for why).
 
 Every array is an explicit argument; the kernels run unchanged on CPU and CUDA.
