@@ -50,9 +50,13 @@ def blend_skinning(vertices, weights, transforms):
             + blended[..., 2] * v[..., 2:3] + blended[..., 3])
 
 
-def rigid_transforms(rot: torch.Tensor, joints: torch.Tensor, parents: list[int]) -> tuple[torch.Tensor, torch.Tensor]:
-    """Torch version of :func:`rigid_transforms_np` (no in-place writes, so autograd works)."""
-    rel_joints = torch.cat([joints[:, :1], joints[:, 1:] - joints[:, parents[1:]]], dim=1)
+def rigid_transforms(rot: torch.Tensor, joints: torch.Tensor, parents: list[int],
+                     parent_index: torch.Tensor | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+    """Torch version of :func:`rigid_transforms_np` (no in-place writes, so autograd works).
+    ``parent_index``: ``parents[1:]`` as a long tensor on ``joints``' device, where the caller keeps
+    one (indexing with the list copies it from the host each call, which a CUDA graph cannot hold)."""
+    idx = parents[1:] if parent_index is None else parent_index
+    rel_joints = torch.cat([joints[:, :1], joints[:, 1:] - joints[:, idx]], dim=1)
     top = torch.cat([rot, rel_joints.unsqueeze(-1)], dim=-1)  # [B, J, 3, 4]
     bottom = torch.zeros_like(top[..., :1, :])
     bottom[..., 0, 3] = 1.0

@@ -76,7 +76,9 @@ class MotionCVAE(nn.Module):
     def encode(self, x: torch.Tensor, label: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
         """(μ, log σ²) [B, d_model] of sequences ``x`` [B, T, 147] of class ``label`` [B]."""
         B, T, _ = x.shape
-        tokens = self.label_encoder(nn.functional.one_hot(label, self.labels).to(x.dtype)).reshape(B, 2, self.d_model)
+        # one-hot by a scatter: F.one_hot checks its classes on the host, which a CUDA graph cannot hold
+        one_hot = torch.zeros(B, self.labels, dtype=x.dtype, device=x.device).scatter_(1, label[:, None], 1.0)
+        tokens = self.label_encoder(one_hot).reshape(B, 2, self.d_model)
         h = torch.cat([tokens, self.pose_embedding(x)], dim=1)
         h = h + sinusoidal_positions(T + 2, self.d_model, x.device)[None]
         out = self.encoder(h)

@@ -8,6 +8,13 @@
 - L_KL: the KL divergence of N(μ, σ²) from N(0, I), averaged over the batch.
 Adam, and the rate times ``lr_factor`` when the validation loss has not fallen for ``lr_patience``
 epochs (§4.2).
+
+On one CUDA device the forward and backward pass of a full training batch is one CUDA graph
+(``MotionConfig.cuda_graph``): captured at the first full batch, replayed for every later one with
+the batch copied into its input tensors; the gradients it writes (into its own memory) are the
+parameters' ``.grad`` after each replay, so Lightning's clipping and Adam's step run on them as
+after an eager backward. A batch of another size (an epoch's last) runs eagerly and accumulates
+into the same tensors (zeroed in place before each step, never set to None).
 """
 
 from __future__ import annotations
@@ -27,6 +34,7 @@ class BodyLayer(torch.nn.Module):
         super().__init__()
         f32 = torch.float32
         self.parents = [int(p) for p in body["parents"]]
+        self.register_buffer("parent_index", torch.as_tensor(self.parents[1:], dtype=torch.long), persistent=False)
         self.register_buffer("v_template", torch.as_tensor(body["v_template"], dtype=f32), persistent=False)
         self.register_buffer("shapedirs", torch.as_tensor(body["shapedirs"], dtype=f32), persistent=False)
         self.register_buffer("J_regressor", torch.as_tensor(body["J_regressor"], dtype=f32), persistent=False)
@@ -38,7 +46,7 @@ class BodyLayer(torch.nn.Module):
         S = betas.shape[-1]
         shaped = self.v_template[None] + torch.einsum("vcs,bs->bvc", self.shapedirs[:, :, :S], betas)
         joints = torch.einsum("jv,bvc->bjc", self.J_regressor, shaped)
-        _, rel = rigid_transforms(rot, joints, self.parents)
+        _, rel = rigid_transforms(rot, joints, self.parents, self.parent_index)
         return blend_skinning(shaped[:, self.keep], self.weights, rel) + trans[:, None, :]
 
 
@@ -62,6 +70,8 @@ class MotionModule(pl.LightningModule):
                                 label_hidden=config["label_hidden"])
         self.body = BodyLayer(body, config["vertex_stride"])
         self.register_buffer("betas", torch.as_tensor(betas, dtype=torch.float32), persistent=False)
+        self._graph = None  # (CUDAGraph, static inputs, static losses) once captured
+        self._graphed_step = False  # whether the current training step's backward ran in the graph
 
     def vertices(self, rot: torch.Tensor, trans: torch.Tensor, body: torch.Tensor) -> torch.Tensor:
         """Posed vertices [B, T, V', 3] of rotations [B, T, 24, 3, 3], translations [B, T, 3] on the
@@ -96,13 +106,72 @@ class MotionModule(pl.LightningModule):
         result["loss"] = total
         return result
 
+    def _use_graph(self, batch) -> bool:
+        trainer = getattr(self, "_trainer", None)
+        return (bool(self.config.get("cuda_graph", True)) and self.device.type == "cuda"
+                and (trainer is None or (trainer.world_size == 1 and str(trainer.precision) != "16-mixed"))
+                and len(batch["label"]) == self.config["batch_size"])
+
+    def _graph_losses(self, batch: dict) -> dict[str, torch.Tensor]:
+        """Forward and backward of ``batch`` by replaying the captured graph (captured first)."""
+        if self._graph is None:
+            dtype = torch.get_autocast_dtype("cuda") if torch.is_autocast_enabled("cuda") else None
+            static = {k: v.clone() for k, v in batch.items()}
+
+            def forward_backward():
+                with torch.autocast("cuda", dtype=dtype or torch.float32, enabled=dtype is not None,
+                                    cache_enabled=False):
+                    r = self.losses(static)
+                r["loss"].backward()
+                return {k: v.detach() for k, v in r.items()}
+
+            side = torch.cuda.Stream()
+            side.wait_stream(torch.cuda.current_stream())
+            with torch.cuda.stream(side):  # warm-up passes (cuBLAS workspaces, autograd's caches)
+                for _ in range(3):
+                    forward_backward()
+            torch.cuda.current_stream().wait_stream(side)
+            # no gradients before the capture: the backward then allocates them in the graph's own
+            # memory and writes (not adds) them at each replay. Gradients that existed before it
+            # would be read by the graph after the capture had freed them (their memory reused
+            # by other tensors: a Lightning run trained on garbage and logged zeros)
+            params = [p for p in self.parameters() if p.requires_grad]
+            for p in params:
+                p.grad = None
+            graph = torch.cuda.CUDAGraph()
+            with torch.cuda.graph(graph):
+                out = forward_backward()
+            self._graph = (graph, static, out, [(p, p.grad) for p in params])
+        graph, static, out, grads = self._graph
+        for k, v in batch.items():
+            static[k].copy_(v)
+        graph.replay()
+        for p, g in grads:  # the optimiser reads these (whoever set .grad to None since)
+            p.grad = g
+        return out
+
     def training_step(self, batch, _):
-        r = self.losses(batch)
+        self._graphed_step = self._use_graph(batch)
+        if self._graphed_step:  # fresh copies: the graph's outputs are overwritten at each replay
+            r = {k: v.clone() for k, v in self._graph_losses(batch).items()}
+        else:
+            r = self.losses(batch)
         n = len(batch["label"])
         for k in ("loss", "pose", "vertex", "kl"):
             self.log(f"train/{k}", r[k], batch_size=n, prog_bar=k == "loss", sync_dist=True, on_epoch=True,
                      on_step=k == "loss")
         return r["loss"]
+
+    def backward(self, loss, *args, **kwargs):
+        if not self._graphed_step:  # a replayed step's backward ran in the graph
+            super().backward(loss, *args, **kwargs)
+
+    def optimizer_zero_grad(self, epoch, batch_idx, optimizer):
+        # Lightning zeroes between the training step and the backward: a replayed step has written
+        # its gradients already (and they are written, not added, so nothing needs zeroing); an
+        # eager step accumulates into the graph's gradient tensors, zeroed in place
+        if not self._graphed_step:
+            optimizer.zero_grad(set_to_none=self._graph is None)
 
     def validation_step(self, batch, _):
         r = self.losses(batch, sample=False)
