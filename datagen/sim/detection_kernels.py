@@ -1,8 +1,9 @@
 """Warp kernels of the cloth-cloth contact detection: bounds for the BVHs, the vertex-triangle and
 edge-edge pair queries with their sorted contact lists, the buffers' needed capacity and each
-vertex's conservative move bound (Chen et al. 2024, §3.6). Split from :mod:`datagen.sim.kernels`
-(the solve); :mod:`datagen.sim.solver` arranges the launches, :mod:`datagen.sim.metrics` uses the
-face bounds. Every array is an explicit argument; the kernels run unchanged on CPU and CUDA."""
+vertex's conservative move bound (Chen et al. 2024, §3.6), and the segment-triangle crossing test
+that the crossing metric and the untangling share. Split from :mod:`datagen.sim.kernels` (the
+solve); :mod:`datagen.sim.solver` arranges the launches, :mod:`datagen.sim.metrics` uses the face
+bounds. Every array is an explicit argument; the kernels run unchanged on CPU and CUDA."""
 
 from __future__ import annotations
 
@@ -80,6 +81,25 @@ def edge_bounds(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), p
     b = x[edges[e, 1]]
     lower[e] = wp.min(a, b) - wp.vec3(pad)
     upper[e] = wp.max(a, b) + wp.vec3(pad)
+
+
+@wp.func
+def segment_triangle_parameter(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> float:
+    """Where segment pq crosses triangle abc, as the parameter along pq in [0, 1]; -1 if it does
+    not (both ends on one side, or the point outside the triangle)."""
+    n = wp.cross(b - a, c - a)
+    dp = wp.dot(p - a, n)
+    dq = wp.dot(q - a, n)
+    if dp * dq > 0.0 or dp == dq:
+        return -1.0
+    t = dp / (dp - dq)
+    r = p + (q - p) * t
+    c0 = wp.dot(wp.cross(b - a, r - a), n)
+    c1 = wp.dot(wp.cross(c - b, r - b), n)
+    c2 = wp.dot(wp.cross(a - c, r - c), n)
+    if (c0 >= 0.0 and c1 >= 0.0 and c2 >= 0.0) or (c0 <= 0.0 and c1 <= 0.0 and c2 <= 0.0):
+        return t
+    return -1.0
 
 
 @wp.kernel

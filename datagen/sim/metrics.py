@@ -20,7 +20,7 @@ import numpy as np
 import warp as wp
 
 from datagen.geometry.queries import signed_distance
-from datagen.sim.detection_kernels import face_bounds
+from datagen.sim.detection_kernels import face_bounds, segment_triangle_parameter
 
 METRIC_NAMES = ("stretch_max", "stretch_mean", "penetration_count", "penetration_depth", "self_intersections",
                 "kinetic_energy", "nan", "slip")
@@ -80,21 +80,6 @@ def _inside(body_meshes: wp.array(dtype=wp.uint64), x: wp.array(dtype=wp.vec3), 
     depth[i] = wp.max(-d, 0.0)
 
 
-@wp.func
-def _segment_crosses(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> bool:
-    n = wp.cross(b - a, c - a)
-    dp = wp.dot(p - a, n)
-    dq = wp.dot(q - a, n)
-    if dp * dq > 0.0 or dp == dq:
-        return False
-    t = dp / (dp - dq)
-    r = p + (q - p) * t
-    c0 = wp.dot(wp.cross(b - a, r - a), n)
-    c1 = wp.dot(wp.cross(c - b, r - b), n)
-    c2 = wp.dot(wp.cross(a - c, r - c), n)
-    return (c0 >= 0.0 and c1 >= 0.0 and c2 >= 0.0) or (c0 <= 0.0 and c1 <= 0.0 and c2 <= 0.0)
-
-
 @wp.kernel
 def crossings(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
               faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32), out: wp.array(dtype=wp.int32),
@@ -114,7 +99,7 @@ def crossings(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(d
         k = faces[t, 2]
         if i == a or i == b or j == a or j == b or k == a or k == b:
             continue
-        if _segment_crosses(x[a], x[b], x[i], x[j], x[k]):
+        if segment_triangle_parameter(x[a], x[b], x[i], x[j], x[k]) >= 0.0:
             if n < pairs.shape[1]:
                 pairs[e, n] = t
             n += 1

@@ -25,24 +25,7 @@ from __future__ import annotations
 
 import warp as wp
 
-
-@wp.func
-def segment_triangle_parameter(p: wp.vec3, q: wp.vec3, a: wp.vec3, b: wp.vec3, c: wp.vec3) -> float:
-    """Where segment pq crosses triangle abc, as the parameter along pq in [0, 1]; -1 if it does
-    not (both ends on one side, or the point outside the triangle)."""
-    n = wp.cross(b - a, c - a)
-    dp = wp.dot(p - a, n)
-    dq = wp.dot(q - a, n)
-    if dp * dq > 0.0 or dp == dq:
-        return -1.0
-    t = dp / (dp - dq)
-    r = p + (q - p) * t
-    c0 = wp.dot(wp.cross(b - a, r - a), n)
-    c1 = wp.dot(wp.cross(c - b, r - b), n)
-    c2 = wp.dot(wp.cross(a - c, r - c), n)
-    if (c0 >= 0.0 and c1 >= 0.0 and c2 >= 0.0) or (c0 <= 0.0 and c1 <= 0.0 and c2 <= 0.0):
-        return t
-    return -1.0
+from datagen.sim.detection_kernels import segment_triangle_parameter
 
 
 @wp.func

@@ -9,7 +9,10 @@ import pytest
 MICRO_TRAIN = {
     "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07,
     "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
-                   "solver": {"substeps": 3, "iterations": 3, "detection_interval": 2}},
+                   # a toy solve (3 substeps x 3 sweeps, 7 cm edges): its garments are not the data
+                   # here. The untangling is off: with 3 sweeps the membrane cannot relax around
+                   # its moves, and the T-shirt on seed:1 tore (143 % at frame 11; docs/simulator.md)
+                   "solver": {"substeps": 3, "iterations": 3, "detection_interval": 2, "untangle_step": 0.0}},
     "train": {"garments": ["tshirt:0", "pants:0"], "bodies": ["regular", "seed:1"], "motions": ["walk:0"]},
     "val": {"garments": ["skirt:1"], "bodies": ["thin"], "motions": ["wave:1"]},
     "test": {"garments": ["tshirt:2"], "bodies": ["fat"], "motions": ["walk:2"]},
