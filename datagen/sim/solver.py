@@ -260,7 +260,7 @@ class SolverVBD:
             self.ee_count = wp.zeros(ne, dtype=wp.int32)
             self.needed = wp.zeros(3, dtype=wp.int32)
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
-            self.untangle_push = z3(n)
+            self.untangle_push = wp.zeros((n, 3), dtype=wp.int32)  # untangle_kernels.PUSH_SCALE units
             self.untangle_hits = wp.zeros(n, dtype=wp.int32)  # crossings each vertex is part of
         self._allocate_contacts(self.config.contact_capacity)
         self.contact_growths = 0

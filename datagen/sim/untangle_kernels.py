@@ -27,6 +27,11 @@ import warp as wp
 
 from datagen.sim.detection_kernels import segment_triangle_parameter
 
+PUSH_SCALE = wp.constant(1.0e6)
+"""Unit gradients are summed per vertex as integers of 1/PUSH_SCALE: integer atomic sums do not
+depend on the order in which threads add them, so a run on CUDA stays bitwise repeatable (float
+atomics would not)."""
+
 
 @wp.func
 def contour_gradient(xa: wp.vec3, xb: wp.vec3, n_tri: wp.vec3, has0: int, o0: wp.vec3, has1: int,
@@ -63,12 +68,13 @@ def contour_gradient(xa: wp.vec3, xb: wp.vec3, n_tri: wp.vec3, has0: int, o0: wp
 @wp.kernel
 def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
                       faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
-                      frozen: wp.array(dtype=wp.int32), push: wp.array(dtype=wp.vec3),
+                      frozen: wp.array(dtype=wp.int32), push: wp.array2d(dtype=wp.int32),
                       hits: wp.array(dtype=wp.int32)):
     """For every edge of the cloth (``edges`` [E, 4]: its two vertices and the corners opposite it,
     -1 on a border) that crosses a triangle of its own scene: add the unit contour gradient to the
-    edge's two vertices' ``push`` and subtract it from the triangle's three, and count the crossing
-    at all five (``hits``; a vertex with hits > 0 is tangled)."""
+    edge's two vertices' ``push`` and subtract it from the triangle's three (``push`` [N, 3] in
+    integer units of 1/:data:`PUSH_SCALE`), and count the crossing at all five (``hits``; a vertex
+    with hits > 0 is tangled)."""
     e = wp.tid()
     a = edges[e, 0]
     b = edges[e, 1]
@@ -104,11 +110,13 @@ def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp
         if gl < 1.0e-9:
             continue
         g = g / gl
-        wp.atomic_add(push, a, g)
-        wp.atomic_add(push, b, g)
-        wp.atomic_add(push, i, -g)
-        wp.atomic_add(push, j, -g)
-        wp.atomic_add(push, k, -g)
+        for d in range(3):
+            q = int(wp.round(g[d] * PUSH_SCALE))
+            wp.atomic_add(push, a, d, q)
+            wp.atomic_add(push, b, d, q)
+            wp.atomic_add(push, i, d, -q)
+            wp.atomic_add(push, j, d, -q)
+            wp.atomic_add(push, k, d, -q)
         wp.atomic_add(hits, a, 1)
         wp.atomic_add(hits, b, 1)
         wp.atomic_add(hits, i, 1)
@@ -117,12 +125,13 @@ def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp
 
 
 @wp.kernel
-def apply_untangle(push: wp.array(dtype=wp.vec3), hits: wp.array(dtype=wp.int32), active: wp.array(dtype=wp.int32),
-                   step: float, x: wp.array(dtype=wp.vec3)):
+def apply_untangle(push: wp.array2d(dtype=wp.int32), hits: wp.array(dtype=wp.int32),
+                   active: wp.array(dtype=wp.int32), step: float, x: wp.array(dtype=wp.vec3)):
     """Moves every tangled vertex by ``step`` times the mean of its unit contour gradients (at
     most ``step``)."""
     i = wp.tid()
     c = hits[i]
     if c == 0 or active[i] == 0:
         return
-    x[i] = x[i] + push[i] * (step / float(c))
+    g = wp.vec3(float(push[i, 0]), float(push[i, 1]), float(push[i, 2]))
+    x[i] = x[i] + g * (step / (float(c) * PUSH_SCALE))

@@ -6,6 +6,7 @@ crossings it undoes) is measured by ``benchmarks/bench_sim.py run-scenes`` (``do
 from __future__ import annotations
 
 import numpy as np
+import pytest
 import warp as wp
 
 from datagen.sim import untangle_kernels as U
@@ -23,7 +24,7 @@ TIP = 25 + 12
 """The lower patch's centre vertex."""
 
 
-def poked(tip: float = 0.003):
+def poked(tip: float = 0.003, device: str = "cpu"):
     """Two flat 8 x 8 cm patches of jersey in one scene, 2 cm grids in XZ, the upper one at y = 0
     and the lower one 5 mm under it (beyond the contact distance); and positions where the lower
     one's centre vertex is raised to ``tip``: for a tip above 0 the tent around it pokes through
@@ -34,7 +35,7 @@ def poked(tip: float = 0.003):
     b = ClothModelBuilder()
     b.add_cloth(up_v, up_f, material_name="jersey", scene=0)
     b.add_cloth(lo_v, lo_f, material_name="jersey", scene=0)
-    model = b.finalize("cpu")
+    model = b.finalize(device)
     x = model.host.rest_positions.astype(np.float32).copy()
     x[TIP, 1] = tip
     return model, x
@@ -68,7 +69,7 @@ def contour_steps(model, x, step: float, count: int) -> list[int]:
     m = model
     cross = Crossings(m)
     bvh = wp.Bvh(cross.lo, cross.hi)
-    push = wp.zeros(m.particle_count, dtype=wp.vec3, device="cpu")
+    push = wp.zeros((m.particle_count, 3), dtype=wp.int32, device="cpu")
     hits = wp.zeros(m.particle_count, dtype=wp.int32, device="cpu")
     frozen = wp.zeros(m.scene_count, dtype=wp.int32, device="cpu")
     counts = []
@@ -127,3 +128,23 @@ def test_solver_without_crossings_is_unchanged_by_the_untangling():
         runs.append(s0.positions.numpy())
     assert SolverConfig().untangle_step > 0
     assert np.array_equal(runs[0], runs[1])
+
+
+@pytest.mark.parametrize("device", ["cpu", pytest.param("cuda", marks=pytest.mark.skipif(
+    wp.get_cuda_device_count() == 0, reason="needs a CUDA device: thread order only varies there"))])
+def test_untangling_is_bitwise_repeatable(device):
+    """Two solvers on the poked scene (crossings, so the untangling moves vertices) give bitwise
+    the same positions after 3 frames: the gradients are summed as integers, so the order in which
+    CUDA threads add them does not matter. (A third run without the untangling ends elsewhere.)"""
+    runs = []
+    for step in (SolverConfig().untangle_step, SolverConfig().untangle_step, 0.0):
+        model, x0 = poked(device=device)
+        s0, s1 = ClothState.from_model(model, x0), ClothState.from_model(model, x0)
+        control = BodyControl.from_numpy(model, model.host.body_rest)
+        solver = SolverVBD(model, SolverConfig(gravity=(0.0, 0.0, 0.0), untangle_step=step))
+        for _ in range(3):
+            solver.step(s0, s1, control, DT)
+            s0, s1 = s1, s0
+        runs.append(s0.positions.numpy())
+    assert np.array_equal(runs[0], runs[1])
+    assert not np.array_equal(runs[0], runs[2])  # the untangling did act on this scene
