@@ -33,8 +33,9 @@ class MotionConfig:
         cuda_graph: on one CUDA device, capture the training step's forward and backward pass (some
             15,000 operations, each a launch from Python) once as a CUDA graph and replay it for
             every full batch (:class:`~training.motion.module.MotionModule`); the optimiser step
-            and the gradient clipping stay eager. Off, or on a CPU or with DDP, every operation is
-            launched from Python.
+            and the gradient clipping stay eager. Off, or on a CPU, with DDP or with "16-mixed"
+            precision (its loss scaling happens in the backward), every operation is launched from
+            Python.
     """
 
     seed: int = 0
