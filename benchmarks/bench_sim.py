@@ -245,7 +245,9 @@ def prepare_runs(args) -> None:
     from datagen.sim.scene import RunConfig, Scene
 
     model = default_body()
-    betas = resolve_betas(model, body=args.body)[0]
+    body = args.body
+    betas = (resolve_betas(model, seed=int(body.split(":", 1)[1])) if body.startswith("seed:")
+             else resolve_betas(model, body=body))[0]
     scenes, names = [], []
     for kind in args.garments.split(","):
         g = make_garment(kind, model, betas, seed=args.garment_seed, target_edge_length=args.edge)

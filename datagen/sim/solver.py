@@ -262,6 +262,7 @@ class SolverVBD:
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
             self.untangle_push = wp.zeros((n, 3), dtype=wp.int32)  # untangle_kernels.PUSH_SCALE units
             self.untangle_hits = wp.zeros(n, dtype=wp.int32)  # crossings each vertex is part of
+            self.untangle_edges = wp.zeros(ne, dtype=wp.int32)  # edges that crossed at the first iteration
         self._allocate_contacts(self.config.contact_capacity)
         self.contact_growths = 0
         self._graphs: dict[tuple, tuple] = {}
@@ -429,22 +430,24 @@ class SolverVBD:
         wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.bound_fraction, c.self_bound_floor, self.bound])
 
     def _untangle(self, x) -> None:
-        """One step of intersection contour minimisation at ``x``: every vertex of an edge-triangle
-        crossing moves ``untangle_step`` along its contour gradient (:mod:`datagen.sim.untangle_kernels`).
-        Where the cloth crosses nowhere nothing moves."""
+        """``untangle_iterations`` steps of intersection contour minimisation at ``x``: every vertex of
+        an edge-triangle crossing moves ``untangle_step`` along its contour gradient
+        (:mod:`datagen.sim.untangle_kernels`). The first iteration queries every edge and marks those
+        that cross; the later ones query only the marked edges (a crossing that the moves make
+        elsewhere is found at the next substep). Where the cloth crosses nowhere nothing moves."""
         import warp as wp
 
         from datagen.sim import untangle_kernels as U
 
         m = self.model
-        for _ in range(self.config.untangle_iterations):
+        for it in range(self.config.untangle_iterations):
             self.untangle_push.zero_()
             self.untangle_hits.zero_()
             wp.launch(self.D.face_bounds, m.face_count, inputs=[x, m.faces, self.face_lo, self.face_hi])
             self.face_bvh.refit()
-            wp.launch(U.contour_gradients, m.edge_count, inputs=[self.face_bvh.id, x, m.particle_scene, m.faces,
-                                                                 m.edges, self.scene_frozen, self.untangle_push,
-                                                                 self.untangle_hits])
+            wp.launch(U.contour_gradients, m.edge_count, inputs=[
+                self.face_bvh.id, x, m.particle_scene, m.faces, m.edges, self.scene_frozen, int(it > 0),
+                self.untangle_edges, self.untangle_push, self.untangle_hits])
             wp.launch(U.apply_untangle, m.particle_count, inputs=[self.untangle_push, self.untangle_hits, m.active,
                                                                   self.config.untangle_step, x])
 

@@ -68,14 +68,21 @@ def contour_gradient(xa: wp.vec3, xb: wp.vec3, n_tri: wp.vec3, has0: int, o0: wp
 @wp.kernel
 def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
                       faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
-                      frozen: wp.array(dtype=wp.int32), push: wp.array2d(dtype=wp.int32),
-                      hits: wp.array(dtype=wp.int32)):
+                      frozen: wp.array(dtype=wp.int32), only_marked: int, marked: wp.array(dtype=wp.int32),
+                      push: wp.array2d(dtype=wp.int32), hits: wp.array(dtype=wp.int32)):
     """For every edge of the cloth (``edges`` [E, 4]: its two vertices and the corners opposite it,
     -1 on a border) that crosses a triangle of its own scene: add the unit contour gradient to the
     edge's two vertices' ``push`` and subtract it from the triangle's three (``push`` [N, 3] in
     integer units of 1/:data:`PUSH_SCALE`), and count the crossing at all five (``hits``; a vertex
-    with hits > 0 is tangled)."""
+    with hits > 0 is tangled).
+
+    With ``only_marked`` 0 every edge is queried and ``marked[e]`` says whether edge e crossed
+    anything; with 1 only the marked edges are queried (the later iterations of one untangling:
+    a quiet batch pays one tree query per substep, not one per iteration)."""
     e = wp.tid()
+    if only_marked != 0:
+        if marked[e] == 0:
+            return
     a = edges[e, 0]
     b = edges[e, 1]
     s = scene[a]
@@ -85,6 +92,7 @@ def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp
     xb = x[b]
     qry = wp.bvh_query_aabb(face_bvh, wp.min(xa, xb), wp.max(xa, xb), wp.bvh_get_group_root(face_bvh, s))
     t = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    found = int(0)  # noqa: UP018, RUF046
     while wp.bvh_query_next(qry, t):
         i = faces[t, 0]
         j = faces[t, 1]
@@ -122,6 +130,9 @@ def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp
         wp.atomic_add(hits, i, 1)
         wp.atomic_add(hits, j, 1)
         wp.atomic_add(hits, k, 1)
+        found = 1
+    if only_marked == 0:
+        marked[e] = found
 
 
 @wp.kernel

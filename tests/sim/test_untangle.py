@@ -63,24 +63,29 @@ class Crossings:
         return int(self.out.numpy().sum())
 
 
-def contour_steps(model, x, step: float, count: int) -> list[int]:
-    """``count`` steps of the kernels alone (no solver) from positions ``x``; the crossings before
-    each step and after the last."""
+def contour_steps(model, x, step: float, count: int, marked_out: list | None = None) -> list[int]:
+    """``count`` steps of the kernels alone (no solver) from positions ``x``, as the solver runs
+    them: the first queries every edge and marks those that cross, the later ones query only the
+    marked edges. The crossings before each step and after the last; ``marked_out`` gets the
+    number of marked edges."""
     m = model
     cross = Crossings(m)
     bvh = wp.Bvh(cross.lo, cross.hi)
     push = wp.zeros((m.particle_count, 3), dtype=wp.int32, device="cpu")
     hits = wp.zeros(m.particle_count, dtype=wp.int32, device="cpu")
     frozen = wp.zeros(m.scene_count, dtype=wp.int32, device="cpu")
+    marked = wp.zeros(m.edge_count, dtype=wp.int32, device="cpu")
     counts = []
-    for _ in range(count):
+    for it in range(count):
         counts.append(cross(x))
         push.zero_()
         hits.zero_()
         wp.launch(face_bounds, m.face_count, inputs=[x, m.faces, cross.lo, cross.hi], device="cpu")
         bvh.refit()
         wp.launch(U.contour_gradients, m.edge_count, inputs=[bvh.id, x, m.particle_scene, m.faces, m.edges, frozen,
-                                                             push, hits], device="cpu")
+                                                             int(it > 0), marked, push, hits], device="cpu")
+        if it == 0 and marked_out is not None:
+            marked_out.append(int(marked.numpy().sum()))
         wp.launch(U.apply_untangle, m.particle_count, inputs=[push, hits, m.active, step, x], device="cpu")
     counts.append(cross(x))
     return counts
@@ -92,10 +97,12 @@ def test_contour_gradient_pushes_a_poked_tent_back():
     fall to none, and the tip moves down while the upper patch above it moves up."""
     model, x0 = poked()
     x = wp.array(x0, dtype=wp.vec3, device="cpu")
-    counts = contour_steps(model, x, 0.001, 12)
+    marked = []
+    counts = contour_steps(model, x, 0.001, 12, marked)
     x1 = x.numpy()
-    print(f"\ncrossings per contour step (1 mm): {counts}")
+    print(f"\ncrossings per contour step (1 mm): {counts}; edges marked at the first: {marked}")
     assert counts[0] == 12
+    assert marked == [7]  # seven edges make the 12 edge-triangle crossings; the later steps query only these
     assert counts[-1] == 0
     assert x1[TIP, 1] < x0[TIP, 1]
     above = np.argmin(np.linalg.norm(x0[:25, [0, 2]] - x0[TIP, [0, 2]], axis=1))
