@@ -51,9 +51,14 @@ sample:
   ratio waits for a GPU run of the T-shirts with it.
 - Breaking: ``max_strain`` is the stretch gate. Woven apparel fabrics break at 10-45 % elongation
   in strip tests (ISO 13934-1; cotton and silk shirting 10-25 %, denim 15-25 %, polyester and wool
-  20-40 %): a triangle of a woven stretched by more than 50 % is torn cloth or a simulation
-  artefact, and the scene is failed. Knits stretch far more before breaking (single jersey
-  100-300 % along the course): 100 %.
+  20-40 %): a triangle of a woven stretched by more than 45 %, the top of that range, is torn
+  cloth or a simulation artefact, and the scene is failed (50 % until 2026-11-26; the largest
+  strain of a woven that passes the six 300-frame runs and `small` is 31-32 %, so the gate is met
+  with margin where the cloth is sound, and the squat's torn garments, 52-84 %, still fail). A
+  gate at each fabric's own breaking strain (25 % for cotton, silk and denim) would fail those
+  runs: their largest single-triangle strain, in a fold or under a contact, is beyond what the
+  fabric survives, which says the recorded peaks are still not cloth-like. Knits stretch far more
+  before breaking (single jersey 100-300 % along the course): 100 %.
 
 These are approximate presets for simulation, not measurements of particular fabrics; a user with
 measured values passes their own :class:`Material`.
@@ -142,17 +147,17 @@ class Material:
 
 MATERIALS: dict[str, Material] = {
     "cotton": Material(name="cotton", density=0.13, stretch_warp=1800.0, stretch_weft=1200.0, shear=60.0,
-                       poisson=0.3, bending=3.5e-6, friction=0.45, thickness=0.0015, max_strain=0.5, buckling_ratio=0.1),
+                       poisson=0.3, bending=3.5e-6, friction=0.45, thickness=0.0015, max_strain=0.45, buckling_ratio=0.1),
     "denim": Material(name="denim", density=0.40, stretch_warp=6000.0, stretch_weft=3500.0, shear=200.0,
-                      poisson=0.25, bending=2.0e-5, friction=0.5, thickness=0.0025, max_strain=0.5, buckling_ratio=0.1),
+                      poisson=0.25, bending=2.0e-5, friction=0.5, thickness=0.0025, max_strain=0.45, buckling_ratio=0.1),
     "jersey": Material(name="jersey", density=0.18, stretch_warp=120.0, stretch_weft=60.0, shear=15.0,
                        poisson=0.45, bending=3.0e-6, friction=0.4, thickness=0.0015, max_strain=1.0),
     "silk": Material(name="silk", density=0.07, stretch_warp=900.0, stretch_weft=700.0, shear=20.0,
-                     poisson=0.3, bending=5.0e-7, friction=0.3, thickness=0.001, max_strain=0.5, buckling_ratio=0.1),
+                     poisson=0.3, bending=5.0e-7, friction=0.3, thickness=0.001, max_strain=0.45, buckling_ratio=0.1),
     "polyester": Material(name="polyester", density=0.15, stretch_warp=2500.0, stretch_weft=2000.0, shear=80.0,
-                          poisson=0.3, bending=3.0e-6, friction=0.35, thickness=0.0015, max_strain=0.5, buckling_ratio=0.1),
+                          poisson=0.3, bending=3.0e-6, friction=0.35, thickness=0.0015, max_strain=0.45, buckling_ratio=0.1),
     "wool": Material(name="wool", density=0.30, stretch_warp=1500.0, stretch_weft=1000.0, shear=70.0,
-                     poisson=0.3, bending=1.5e-5, friction=0.5, thickness=0.003, max_strain=0.5, buckling_ratio=0.1),
+                     poisson=0.3, bending=1.5e-5, friction=0.5, thickness=0.003, max_strain=0.45, buckling_ratio=0.1),
 }
 """The presets, by name."""
 
