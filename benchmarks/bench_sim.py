@@ -188,22 +188,6 @@ def profile(args) -> None:
             a, c = _play(solver, a, c, ctrl, frames[3:])
             wp.synchronize()
             graph_ms = 1000 * (time.perf_counter() - t) / (len(frames) - 3)
-            if args.bound_body_refit:
-                # what the body meshes' refits cost in the replayed graph: the same frames captured
-                # without them. Their trees go stale, so the physics of these frames is not valid:
-                # a bound on what a cheaper body tree could win, not a way to run
-                refit, solver._refit_body = solver._refit_body, lambda: None
-                solver._graphs.clear()
-                a, c = _play(solver, a, c, ctrl, frames[1:3])
-                wp.synchronize()
-                t = time.perf_counter()
-                a, c = _play(solver, a, c, ctrl, frames[3:])
-                wp.synchronize()
-                bound_ms = 1000 * (time.perf_counter() - t) / (len(frames) - 3)
-                solver._refit_body = refit
-                solver._graphs.clear()
-                print(f"batch {n}: graph replay {graph_ms:.1f} ms/frame; without the body meshes' refits "
-                      f"{bound_ms:.1f} ms/frame (a bound: physics not valid without them)")
             solver.config = launched
         times: dict[str, list] = {}
         wp.synchronize()
@@ -364,9 +348,6 @@ def main() -> None:
     p.add_argument("--self", default="on", help="self-collision settings to run: on, off or on,off")
     p.add_argument("--top", type=int, default=25, help="kernels listed")
     p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a SolverConfig field (repeatable)")
-    p.add_argument("--bound-body-refit", action="store_true",
-                   help="CUDA: also replay the frames captured without the body meshes' refits (what they cost; "
-                        "the physics of those frames is not valid)")
     p.set_defaults(func=profile)
     p = sub.add_parser("prepare-runs", help="scenes for the long-run check (garments x motions)")
     p.add_argument("--out", default="sim_runs.pkl")
