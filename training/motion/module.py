@@ -70,7 +70,7 @@ class MotionModule(pl.LightningModule):
                                 label_hidden=config["label_hidden"])
         self.body = BodyLayer(body, config["vertex_stride"])
         self.register_buffer("betas", torch.as_tensor(betas, dtype=torch.float32), persistent=False)
-        self._graph = None  # (CUDAGraph, static inputs, static losses) once captured
+        self._graph = None  # (CUDAGraph, static inputs, static losses, [(parameter, its gradient)]) once captured
         self._graphed_step = False  # whether the current training step's backward ran in the graph
 
     def vertices(self, rot: torch.Tensor, trans: torch.Tensor, body: torch.Tensor) -> torch.Tensor:
