@@ -115,7 +115,8 @@ def _cmd_make(args) -> int:
         from datagen.motion.quality import BodyProbe, measure_motion
 
         q = measure_motion(motion, BodyProbe(default_body()))
-        print(f"check: interpenetration {q.penetration_share:.1%} of frames, foot skate {q.foot_skate * 100:.2f} cm/s, "
+        print(f"check: interpenetration {q.penetration_share:.1%} of frames, forearms at least "
+              f"{q.arm_leg_clearance * 100:.1f} cm from the legs, foot skate {q.foot_skate * 100:.2f} cm/s, "
               f"ground penetration {q.ground_penetration * 1000:.1f} mm, joint-limit violations "
               f"{q.limit_violation_share:.1%} of frames, jerk {q.jerk_mean:.0f} m/s^3 (mean)")
     return 0

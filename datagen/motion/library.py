@@ -45,7 +45,7 @@ __all__ = ["GENERATOR_VERSION", "LABEL_PARAMS", "ParamSpec", "default_rig", "mak
 
 log = logging.getLogger(__name__)
 
-GENERATOR_VERSION = 1
+GENERATOR_VERSION = 2
 """Bumped whenever a generator changes what a (label, seed) gives."""
 
 DEG = np.pi / 180.0
@@ -367,7 +367,10 @@ def _squat(c: _Ctx) -> None:
     c.pelvis(np.stack([np.zeros(c.T), -depth * s, -0.5 * depth * s], -1), pitch=35 * DEG * s * depth / 0.35)
     c.spine(flex=20 * DEG * s)
     c.head(flex=-30 * DEG * s)
-    raise_ = 80 * DEG * s * p["arm_swing"] / 1.3
+    # arms forward as a counterbalance, 65-95 degrees at the bottom: hanging lower (generator
+    # version 1 swung them 31-80 degrees) the forearms came down onto the thighs, where the skinned
+    # body's parts overlap and cloth caught between them tears
+    raise_ = s * (65 + 30 * (p["arm_swing"] - 0.5) / 0.8) * DEG
     c.arm("left", 75 * DEG, raise_, 10 * DEG)
     c.arm("right", 75 * DEG, raise_, 10 * DEG)
 

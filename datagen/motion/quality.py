@@ -8,6 +8,11 @@ Per motion, on a given body:
   the closed posed body (winding number, warp) *and* on the inner side of the nearest torso face
   within 10 cm (so a fold of the skin behind a bent knee, inside the limb itself, does not count).
   Paper 001 discards such sequences; :func:`filter_motions` does the same and says how many.
+- **arm-leg clearance**: the smallest distance (m) from a forearm or hand vertex to a thigh or shin
+  vertex over the checked frames. Where a forearm rests on a thigh the skinned body's parts meet or
+  overlap, and cloth caught between them has no room: a simulator tears it (the squat of motion
+  generator version 1 did, with its arms hanging onto the thighs). :func:`filter_motions` drops
+  motions below ``min_arm_leg_clearance``.
 - **foot skate**: mean horizontal speed (m/s) of the toe and ankle joints over frames in which
   that joint is in contact (within 1.5 cm of its rest height above the ground and moving
   vertically slower than 0.15 m/s).
@@ -71,6 +76,8 @@ global orientation) is free."""
 _TORSO = {"pelvis", "spine1", "spine2", "spine3", "neck", "head", "left_collar", "right_collar"}
 _LIMB = {f"{s}_{j}" for s in ("left", "right") for j in ("elbow", "wrist", "hand", "knee", "ankle", "foot")}
 _FEET = {f"{s}_{j}" for s in ("left", "right") for j in ("ankle", "foot")}
+_FOREARM = {f"{s}_{j}" for s in ("left", "right") for j in ("elbow", "wrist", "hand")}
+_LEG = {f"{s}_{j}" for s in ("left", "right") for j in ("hip", "knee")}
 
 
 @dataclass(frozen=True)
@@ -81,6 +88,7 @@ class MotionQuality:
     frames_checked: int
     penetration_share: float
     penetration_frames: int
+    arm_leg_clearance: float
     foot_skate: float
     contact_share: float
     ground_penetration: float
@@ -128,6 +136,8 @@ class BodyProbe:
         torso_v = np.isin(names, list(_TORSO))
         self.torso_faces = np.flatnonzero(torso_v[self.faces].all(1))
         self.foot_vertices = np.flatnonzero(np.isin(names, list(_FEET)))
+        self.forearm_vertices = np.flatnonzero(np.isin(names, list(_FOREARM)))
+        self.leg_vertices = np.flatnonzero(np.isin(names, list(_LEG)))
         self.ground_y = float(rest_v[:, 1].min())
         self.rest_joints = rest_j
         self.device = device or wp.get_preferred_device()
@@ -159,6 +169,12 @@ class BodyProbe:
                   device=self.device)
         return int(out.numpy().sum())
 
+    def arm_leg_clearance(self, verts: np.ndarray) -> float:
+        """Smallest distance (m) from a forearm or hand vertex to a thigh or shin vertex of ``verts``."""
+        from scipy.spatial import cKDTree
+
+        return float(cKDTree(verts[self.leg_vertices]).query(verts[self.forearm_vertices])[0].min())
+
 
 def _vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     fn = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
@@ -175,7 +191,7 @@ def measure_motion(motion: Motion, probe: BodyProbe, *, stride: int = 3, chunk: 
     fps = motion.fps
     # joints for every frame (skate, jerk); vertices on the checked frames
     joints = np.empty((T, 24, 3))
-    pen_frames, sink, checked = 0, 0.0, 0
+    pen_frames, sink, checked, clearance = 0, 0.0, 0, np.inf
     check = set(range(0, T, max(1, int(stride))))
     for s in range(0, T, chunk):
         e = min(T, s + chunk)
@@ -186,6 +202,7 @@ def measure_motion(motion: Motion, probe: BodyProbe, *, stride: int = 3, chunk: 
                 checked += 1
                 if probe.penetrating(verts[i]) > 0:
                     pen_frames += 1
+                clearance = min(clearance, probe.arm_leg_clearance(verts[i]))
         sink = max(sink, float(probe.ground_y - verts[:, probe.foot_vertices, 1].min()))
     # foot skate
     speeds, contacts = [], 0
@@ -220,6 +237,7 @@ def measure_motion(motion: Motion, probe: BodyProbe, *, stride: int = 3, chunk: 
     return MotionQuality(
         label_name=motion.label_name, frames_checked=checked,
         penetration_share=pen_frames / max(checked, 1), penetration_frames=pen_frames,
+        arm_leg_clearance=float(clearance),
         foot_skate=float(speeds.mean()) if len(speeds) else 0.0, contact_share=contacts / (4 * max(T - 1, 1)),
         ground_penetration=max(sink, 0.0), limit_violation_share=float(bad.mean()),
         limit_worst_excess_deg=max(worst, 0.0), limit_worst_joint=worst_joint,
@@ -228,24 +246,30 @@ def measure_motion(motion: Motion, probe: BodyProbe, *, stride: int = 3, chunk: 
 
 
 def filter_motions(motions: list[Motion], probe: BodyProbe, *, max_penetration_share: float = 0.0,
+                   min_arm_leg_clearance: float = 0.01,
                    stride: int = 3) -> tuple[list[Motion], list[MotionQuality]]:
-    """Drop motions whose limb-torso interpenetration share exceeds ``max_penetration_share``.
+    """Drop motions whose limb-torso interpenetration share exceeds ``max_penetration_share`` or
+    whose forearms come nearer the legs than ``min_arm_leg_clearance`` (m; 1 cm leaves room for
+    two layers of cloth and their contact margins).
 
     Returns the kept motions and every motion's :class:`MotionQuality` (in input order). Logs how
-    many were dropped, per label.
+    many were dropped, per reason and label.
     """
-    kept, report, dropped = [], [], {}
+    kept, report = [], []
+    dropped: dict[str, dict[str, int]] = {"limb-torso interpenetration": {}, "forearms on the legs": {}}
     for m in motions:
         q = measure_motion(m, probe, stride=stride)
         report.append(q)
-        if q.penetration_share > max_penetration_share:
-            dropped[m.label_name] = dropped.get(m.label_name, 0) + 1
+        reason = ("limb-torso interpenetration" if q.penetration_share > max_penetration_share else
+                  "forearms on the legs" if q.arm_leg_clearance < min_arm_leg_clearance else None)
+        if reason:
+            dropped[reason][m.label_name] = dropped[reason].get(m.label_name, 0) + 1
         else:
             kept.append(m)
-    total = sum(dropped.values())
+    total = sum(sum(d.values()) for d in dropped.values())
     if total:
-        log.info("dropped %d of %d motions for limb-torso interpenetration: %s", total, len(motions),
-                 ", ".join(f"{k} {v}" for k, v in sorted(dropped.items())))
+        log.info("dropped %d of %d motions: %s", total, len(motions), "; ".join(
+            f"{reason}: " + ", ".join(f"{k} {v}" for k, v in sorted(d.items())) for reason, d in dropped.items() if d))
     else:
-        log.info("kept all %d motions (no limb-torso interpenetration)", len(motions))
+        log.info("kept all %d motions (no limb-torso interpenetration, forearms clear of the legs)", len(motions))
     return kept, report

@@ -120,6 +120,7 @@ def test_every_label_passes_the_quality_filters(library, probe):
     for label, m in library.items():
         q = measure_motion(m, probe, stride=4)
         assert q.penetration_frames == 0, label
+        assert q.arm_leg_clearance > 0.02, (label, q.arm_leg_clearance)  # m: room for cloth between
         assert q.limit_violation_share == 0.0, (label, q.limit_worst_joint, q.limit_worst_excess_deg)
         assert q.ground_penetration < 0.005, label
         assert q.foot_skate < 0.05, label  # m/s during contact
@@ -147,6 +148,34 @@ def test_filter_drops_an_interpenetrating_motion(library, probe):
     kept, report = filter_motions([library["walk"], through], probe, stride=6)
     assert kept == [library["walk"]]
     assert report[1].penetration_share > 0.5 and report[0].penetration_share == 0.0
+
+
+def test_squat_forearms_stay_off_the_thighs(default_body):
+    """Every squat seed on the fat body keeps its forearms 3 cm or more from the legs (generator
+    version 1's squat rested them on the thighs, and cloth caught between tore in the simulator)."""
+    from datagen.body.shapes import resolve_betas
+    from datagen.motion.quality import BodyProbe, measure_motion
+
+    fat = BodyProbe(default_body, resolve_betas(default_body, body="fat")[0])
+    for seed in range(10):
+        q = measure_motion(make_motion("squat", seed=seed, frames=90), fat, stride=3)
+        assert q.arm_leg_clearance > 0.03, (seed, q.arm_leg_clearance)
+
+
+def test_filter_drops_forearms_on_the_thighs(library, probe):
+    from datagen.motion.motion import Motion
+    from datagen.motion.quality import filter_motions
+    from datagen.geometry.rotations import matrix_to_axis_angle_np
+
+    bad = library["squat"].poses.copy()
+    # both arms hanging straight down through the squat: the forearms meet the thighs at the bottom
+    for side, sign in (("left", 1.0), ("right", -1.0)):
+        bad[:, J[f"{side}_shoulder"]] = matrix_to_axis_angle_np(euler(f"{side}_shoulder", z=-sign * 1.45)[0])
+        bad[:, J[f"{side}_elbow"]] = 0.0
+    low = Motion(poses=bad, trans=library["squat"].trans, fps=30.0, label=3, label_name="squat")
+    kept, report = filter_motions([library["squat"], low], probe, stride=3)
+    assert kept == [library["squat"]]
+    assert report[1].arm_leg_clearance < 0.01 < report[0].arm_leg_clearance
 
 
 def test_cli_list_make_export_import(tmp_path, capsys):
