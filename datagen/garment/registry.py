@@ -55,6 +55,7 @@ _PIECE_PARAMS = {
     "skirt": ("flare",),
     "separate_legs": ("leg_ease", "hem_ease"),
     "open_front": ("opening", "lapel_depth"),
+    "back_slit": ("slit",),
 }
 """The style parameters the geometry of each silhouette piece reads."""
 
@@ -83,10 +84,18 @@ class GarmentType:
         skirt: a cone from the hips down widening by ``flare`` (skirts, dresses, coats).
         separate_legs: two leg tubes below the crotch (pants, shorts).
         open_front: the front open from the neckline down to the top button (jackets, coats).
+        back_slit: a slit up the back from the hem, ``slit`` long (a straight skirt: without one
+            a knee-length skirt cannot open round the thighs, and a wide stance stretched a cotton
+            skirt by 13-19 % all round, where a real one has a vent or rides up).
         hem_from: the ``hem`` parameter is measured down from the hip joints (``"hips"``) or up
             from the ankle joints (``"ankles"``).
         hem_floor_below_knee: the hem is kept no lower than this far below the knee joints [m]
             (None: no floor).
+        sleeve_above_elbow: a short sleeve ends at least this far above the elbow joint [m]
+            (None: no limit; long sleeves pass the elbow). Within about 8 cm of the joint the
+            upper arm and forearm meet when the elbow bends, and a cuff there is caught in the
+            fold: a T-shirt whose sleeve ended 2 cm above the elbow tore there when the arms came
+            up into a boxing guard (elbows at 125 degrees).
         panels: ``"top"`` (front, back, left and right sleeve), ``"skirt"`` (front, back) or
             ``"legs"`` (left/right front/back).
         side_opening: what the openings left and right of the body's midline are called
@@ -111,6 +120,8 @@ class GarmentType:
     panels: Panels
     side_opening: SideOpening
     top_opening: TopOpening
+    sleeve_above_elbow: float | None = None
+    back_slit: bool = False
 
     def __getstate__(self) -> dict:  # a read-only mapping does not pickle
         return {**self.__dict__, "params": dict(self.params)}
@@ -153,11 +164,15 @@ class GarmentType:
             raise GarmentRegistryError(f"{where}: sleeves and an open front need a garment that hangs from the shoulders")
         if top and self.separate_legs:
             raise GarmentRegistryError(f"{where}: separate legs need a garment that hangs from the waist")
+        if self.sleeve_above_elbow is not None and not (self.sleeves and self.sleeve_above_elbow >= 0):
+            raise GarmentRegistryError(f"{where}: sleeve_above_elbow needs sleeves and a distance >= 0")
+        if self.back_slit and not (self.skirt and not top):
+            raise GarmentRegistryError(f"{where}: a back slit needs a skirt that hangs from the waist")
         if self.separate_legs and self.skirt:
             raise GarmentRegistryError(f"{where}: a skirt and separate legs do not go together")
         pieces = [self.hangs_from, "sleeves" if self.sleeves else ("armholes" if top else None),
                   "skirt" if self.skirt else None, "separate_legs" if self.separate_legs else None,
-                  "open_front" if self.open_front else None]
+                  "open_front" if self.open_front else None, "back_slit" if self.back_slit else None]
         missing = [p for piece in pieces if piece for p in _PIECE_PARAMS[piece] if p not in self.params]
         if missing:
             raise GarmentRegistryError(f"{where}: its pieces need the style parameters {', '.join(missing)}")
@@ -202,7 +217,7 @@ _LEGS = {**_SKIRT_ONLY, "skirt": False, "separate_legs": True, "hem_floor_below_
 
 _RECORDS = (
     GarmentType(name="tshirt", code=0, params={**_TOP, **_SLEEVE}, material="jersey", boundary_loops=4,
-                edge_length=0.018, area_guess=1.1, **_SLEEVED_TOP),
+                edge_length=0.018, area_guess=1.1, **_SLEEVED_TOP, sleeve_above_elbow=0.09),
     GarmentType(name="long_sleeve_shirt", code=1,
                 params={**_TOP, **_SLEEVE, "sleeve_length": ParamSpec(0.38, 0.47, "sleeve from the shoulder joint (m)")},
                 material="cotton", boundary_loops=4, edge_length=0.02, area_guess=1.3, **_SLEEVED_TOP),
@@ -241,8 +256,11 @@ _RECORDS = (
                 params={**_WAIST_EASE,
                         **_WAIST_DROP,
                         "hem": ParamSpec(0.2, 0.45, "hem below the hip joints (m)"),
-                        "flare": ParamSpec(0.0, 0.06, "widening per metre below the hips (straight cut)")},
-                material="cotton", boundary_loops=2, edge_length=0.013, area_guess=0.8, **_SKIRT_ONLY),
+                        "flare": ParamSpec(0.0, 0.06, "widening per metre below the hips (straight cut)"),
+                        "slit": ParamSpec(0.2, 0.3, "back slit up from the hem (m; its top at most 10 cm below "
+                                                    "the hip joints)")},
+                material="cotton", boundary_loops=2, edge_length=0.013, area_guess=0.8, **_SKIRT_ONLY,
+                back_slit=True),
     GarmentType(name="flared_skirt", code=7,
                 params={**_WAIST_EASE,
                         **_WAIST_DROP,

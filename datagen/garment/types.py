@@ -45,7 +45,7 @@ at the shoulder joints' height."""
 MAX_VERTICES = 200_000
 """Largest garment drape builds; a smaller edge length is refused with the memory it would take."""
 
-BUILDER_VERSION = 8
+BUILDER_VERSION = 9
 
 
 def default_edge_length(kind: str) -> float:
@@ -119,6 +119,13 @@ def make_garment(kind: str, body_model, betas=None, *, seed: int = 0, params: di
     betas = np.zeros(body_model.shape_dim) if betas is None else np.asarray(betas, dtype=np.float64).reshape(-1)
     verts = np.asarray(body_model.shaped(betas))[0]
     body = _Body(verts=verts, faces=np.asarray(body_model.faces), joints=np.asarray(body_model.rest_joints(betas))[0])
+    if spec.sleeve_above_elbow is not None:  # a short sleeve stops short of the elbow's fold (recorded so)
+        reach = abs(body.j("left_elbow")[0]) - abs(body.j("left_shoulder")[0]) - spec.sleeve_above_elbow
+        if p["sleeve_length"] > max(reach, 0.05):
+            if params and "sleeve_length" in params:
+                log.warning("%s sleeve_length %.3f m shortened to %.3f m: a %s's sleeve ends %.0f cm above the elbow",
+                            kind, p["sleeve_length"], max(reach, 0.05), kind, 100 * spec.sleeve_above_elbow)
+            p["sleeve_length"] = float(max(reach, 0.05))
     area_guess = spec.area_guess
     est_vertices = int(area_guess / (np.sqrt(3) / 4 * target_edge_length**2) / 2)
     if est_vertices > MAX_VERTICES:
@@ -332,6 +339,8 @@ def _design(spec: GarmentType, p: dict, body: _Body, spacing: float):
         # legs splits in two and the hem would become two openings (thin bodies, long hems)
         hem_y = max(hem_y, crotch_y + 0.015)
 
+    slit_top = min(hem_y + p["slit"], hip_y - 0.1) if spec.back_slit else hem_y
+
     def keep(pts):
         x, y, z = pts[:, 0], pts[:, 1], pts[:, 2]
         cuts = [y - hem_y]
@@ -359,6 +368,10 @@ def _design(spec: GarmentType, p: dict, body: _Body, spacing: float):
                 cuts.append(np.maximum.reduce([np.abs(x) - half, (hzc + 0.02) - z, button_y - y]))
         else:
             cuts.append((waist_y - p["waist"]) - y)
+        if spec.back_slit and slit_top > hem_y + 0.03:
+            # as wide as the open front's slot (2 grid steps either side), behind the hips' centre
+            half = 2.0 * spacing
+            cuts.append(np.maximum.reduce([np.abs(x) - half, z - hzc, y - slit_top]))
         return np.minimum.reduce(cuts)
 
     # --- grid box
