@@ -494,12 +494,22 @@ def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3)
     return force, hess
 
 
+PINCH_COS = wp.constant(0.5)
+"""Two parts press a vertex from sides whose normals are more than 60 degrees apart (cosine below
+this): it is caught in a fold of the skinned body (a hip crease closing as the thigh comes up, an
+armpit), where the two skin surfaces slide through each other as no real skin does; friction with
+either one alone dragged the cloth across the fold and tore it (a pair of shorts at 70 % in a
+squat at 75 degrees of hip flexion). At 90 degrees (cosine 0), the limit before, a closing crease
+was not counted until it was nearly shut."""
+
+
 @wp.func
 def friction_part(i: int, has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dtype=wp.vec3),
                   lam: wp.array2d(dtype=float)) -> int:
     """The body part whose friction acts on vertex i: the one that pressed it hardest at the end
     of the last substep (λ lagged, as in IPC); -1 for none, and for a vertex pinched between two
-    parts that press it from opposite sides (it slides out of the pinch)."""
+    parts that press it from sides more than 60 degrees apart (:data:`PINCH_COS`; it slides out of
+    the pinch)."""
     best = int(-1)
     big = float(0.0)
     for p in range(has.shape[1]):
@@ -510,7 +520,7 @@ def friction_part(i: int, has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dt
         return best
     n = normal[i, best]
     for p in range(has.shape[1]):
-        if p != best and has[i, p] == 1 and lam[i, p] > 0.0 and wp.dot(normal[i, p], n) < 0.0:
+        if p != best and has[i, p] == 1 and wp.dot(normal[i, p], n) < PINCH_COS:
             return -1
     return best
 
