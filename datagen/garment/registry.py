@@ -86,7 +86,7 @@ class GarmentType:
         open_front: the front open from the neckline down to the top button (jackets, coats).
         back_slit: a slit up the back from the hem, ``slit`` long (a straight skirt: without one
             a knee-length skirt cannot open round the thighs, and a wide stance stretched a cotton
-            skirt by 13-19 % all round, where a real one has a vent or rides up).
+            skirt by 11-14 % all round its hem, where a real one has a vent or rides up).
         hem_from: the ``hem`` parameter is measured down from the hip joints (``"hips"``) or up
             from the ankle joints (``"ankles"``).
         hem_floor_below_knee: the hem is kept no lower than this far below the knee joints [m]

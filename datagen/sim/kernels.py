@@ -495,21 +495,22 @@ def bending_force_hessian(i: int, local: int, e: int, x: wp.array(dtype=wp.vec3)
 
 
 PINCH_COS = wp.constant(0.5)
-"""Two parts press a vertex from sides whose normals are more than 60 degrees apart (cosine below
-this): it is caught in a fold of the skinned body (a hip crease closing as the thigh comes up, an
-armpit), where the two skin surfaces slide through each other as no real skin does; friction with
-either one alone dragged the cloth across the fold and tore it (a pair of shorts at 70 % in a
-squat at 75 degrees of hip flexion). At 90 degrees (cosine 0), the limit before, a closing crease
-was not counted until it was nearly shut."""
+"""A vertex with contact planes from two parts (both within the body query) whose normals are more
+than 60 degrees apart (cosine below this) is in a fold of the skinned body (a hip crease closing as
+the thigh comes up, an armpit), where the two skin surfaces slide through each other as no real
+skin does; friction with either one alone dragged the cloth across the fold and tore it (a pair of
+shorts at 70 % in a squat at 75 degrees of hip flexion). Before, only a vertex that both parts
+pressed (λ > 0) from sides more than 90 degrees apart counted; in a closing crease most vertices
+are pressed by one side at a time, and at 60 degrees with that condition the shorts still tore."""
 
 
 @wp.func
 def friction_part(i: int, has: wp.array2d(dtype=wp.int32), normal: wp.array2d(dtype=wp.vec3),
                   lam: wp.array2d(dtype=float)) -> int:
     """The body part whose friction acts on vertex i: the one that pressed it hardest at the end
-    of the last substep (λ lagged, as in IPC); -1 for none, and for a vertex pinched between two
-    parts that press it from sides more than 60 degrees apart (:data:`PINCH_COS`; it slides out of
-    the pinch)."""
+    of the last substep (λ lagged, as in IPC); -1 for none, and for a vertex in a fold of the body:
+    a plane from another part within reach at more than 60 degrees to the best's (:data:`PINCH_COS`;
+    it slides out of the fold)."""
     best = int(-1)
     big = float(0.0)
     for p in range(has.shape[1]):

@@ -67,6 +67,28 @@ def test_other_bodies(default_body, body, kinds):
         assert c["ok"], (body, kind, c["failures"])
 
 
+def test_tshirt_sleeve_ends_above_the_elbow_and_skirt_has_a_back_slit(garments, default_body):
+    """Builder 9: a T-shirt sleeve drawn long is built (and recorded) 9 cm short of the elbow; the
+    straight skirt's hem runs up a slit at the back, and only there."""
+    from datagen.body.skeleton import SMPL_JOINT_NAMES
+
+    joints = np.asarray(default_body.rest_joints(np.zeros(default_body.shape_dim)))[0]
+    reach = joints[SMPL_JOINT_NAMES.index("left_elbow"), 0] - joints[SMPL_JOINT_NAMES.index("left_shoulder"), 0]
+    long_ = make_garment("tshirt", default_body, seed=3, params={"sleeve_length": 0.25})
+    assert long_.metadata.params["sleeve_length"] == pytest.approx(reach - 0.09)
+    assert np.abs(long_.vertices[:, 0]).max() < joints[SMPL_JOINT_NAMES.index("left_elbow"), 0] - 0.09 + 0.01
+    short = make_garment("tshirt", default_body, seed=3, params={"sleeve_length": 0.12})
+    assert short.metadata.params["sleeve_length"] == pytest.approx(0.12)  # short ones are left alone
+
+    skirt = garments["skirt"]
+    hem = skirt.vertices[skirt.loops["hem"]]
+    low = hem[:, 1].min()
+    back_mid = hem[(np.abs(hem[:, 0]) < 0.03) & (hem[:, 2] < 0)]
+    front_mid = hem[(np.abs(hem[:, 0]) < 0.03) & (hem[:, 2] > 0)]
+    assert back_mid[:, 1].max() - low > 0.15  # the slit: 20-30 cm drawn, its top kept 10 cm below the hips
+    assert front_mid[:, 1].max() - low < 0.03  # the front hem stays level
+
+
 def test_open_front_cut_that_pinches_the_boundary_is_split(default_body):
     """Coat seed 19 on the thin body: the cut of the open front leaves the boundary touching itself
     at one vertex; the vertex is split, so the coat has its three openings and passes every check."""

@@ -71,6 +71,12 @@ def test_a_record_whose_pieces_do_not_fit_is_refused():
         dataclasses.replace(tank, hangs_from="hips")
     with pytest.raises(GarmentRegistryError, match="material 'leather' is not a preset"):
         dataclasses.replace(tank, material="leather")
+    with pytest.raises(GarmentRegistryError, match="sleeve_above_elbow needs sleeves"):
+        dataclasses.replace(tank, sleeve_above_elbow=0.09)
+    with pytest.raises(GarmentRegistryError, match="a back slit needs a skirt that hangs from the waist"):
+        dataclasses.replace(GARMENT_TYPES["pants"], back_slit=True)
+    with pytest.raises(GarmentRegistryError, match="need the style parameters slit"):
+        dataclasses.replace(GARMENT_TYPES["flared_skirt"], back_slit=True)
     with pytest.raises(InputError, match="unknown garment type 'kimono'; types: tshirt"):
         garment_type("kimono")
 
