@@ -268,13 +268,12 @@ def set_body_plane(i: int, p: int, f: int, u: float, v: float, xi: wp.vec3, r: f
 
 @wp.kernel
 def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
-                part_meshes: wp.array(dtype=wp.uint64), part_face_base: wp.array(dtype=wp.int32),
-                part_faces: wp.array(dtype=wp.int32), part_edge_flags: wp.array(dtype=wp.int32),
-                body_face_part: wp.array(dtype=wp.int32),
+                body_face_part: wp.array(dtype=wp.int32), body_face_border: wp.array(dtype=wp.int32),
                 x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
                 body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
                 radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
-                inertia_target: wp.array(dtype=wp.vec3),
+                inertia_target: wp.array(dtype=wp.vec3), best_dist: wp.array2d(dtype=float),
+                best_face: wp.array2d(dtype=wp.int32), best_bary: wp.array2d(dtype=wp.vec2),
                 has: wp.array2d(dtype=wp.int32), point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
                 body_disp: wp.array2d(dtype=wp.vec3)):
     """Contact planes of each cloth vertex with the body (this substep's pose), one slot per body
@@ -286,6 +285,10 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     the nearest alone pushed it into the other part, from which the end-of-substep projection
     then threw it out a hand's width away, tearing its triangles.
 
+    One box query of the scene's body mesh (every face whose bounds come within ``query``) gives
+    every part's closest point at once (``best_*``: scratch, [N, P]); the whole body's is the
+    nearest of them. So only the whole body's tree is refitted each substep, not one per part.
+
     A vertex that the body's move has put closer than a plane's contact radius (or just behind
     it: less than two radii) is first moved out along the normal (the pushes of its planes
     added), with its inertial target, so the body's push is never held back by the cloth's
@@ -294,26 +297,44 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     P = has.shape[1]
     for p in range(P):
         has[i, p] = 0
+        best_dist[i, p] = query
+        best_face[i, p] = -1
     s = scene[i]
     xi = x[i]
     r = radius[i]
-    push = wp.vec3(0.0)
-    q = wp.mesh_query_point_no_sign(body_meshes[s], xi, query)
-    own = int(-1)
-    if q.result:
-        f = body_face_base[s] + q.face
-        own = body_face_part[f]
-        push = push + set_body_plane(i, own, f, q.u, q.v, xi, r, body_faces, body_prev, body_now, has, point, normal,
-                                     body_disp)
+    base = body_face_base[s]
+    q = wp.mesh_query_aabb(body_meshes[s], xi - wp.vec3(query), xi + wp.vec3(query))
+    f = int(0)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    while wp.mesh_query_aabb_next(q, f):
+        g = base + f
+        a = body_now[body_faces[g, 0]]
+        b = body_now[body_faces[g, 1]]
+        c = body_now[body_faces[g, 2]]
+        w = triangle_closest_bary(xi, a, b, c)
+        d = wp.length(xi - (a * w[0] + b * w[1] + c * w[2]))
+        p = body_face_part[g]
+        if d < best_dist[i, p] or (d == best_dist[i, p] and best_face[i, p] >= 0 and g < best_face[i, p]):
+            best_dist[i, p] = d
+            best_face[i, p] = g
+            best_bary[i, p] = wp.vec2(w[0], w[1])
+    own = int(-1)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
+    nearest = float(query)  # noqa: RUF046 (warp: a mutable float in the loop)
     for p in range(P):
-        mid = part_meshes[s * P + p]
-        if p != own and mid != wp.uint64(0):
-            qp = wp.mesh_query_point_no_sign(mid, xi, query)
-            if qp.result:
-                k = part_face_base[s * P + p] + qp.face
-                if not part_border(part_edge_flags[k], qp.u, qp.v):
-                    push = push + set_body_plane(i, p, part_faces[k], qp.u, qp.v, xi, r, body_faces, body_prev,
-                                                 body_now, has, point, normal, body_disp)
+        if best_face[i, p] >= 0 and (own < 0 or best_dist[i, p] < nearest):
+            own = p
+            nearest = best_dist[i, p]
+    push = wp.vec3(0.0)
+    if own >= 0:
+        uv = best_bary[i, own]
+        push = push + set_body_plane(i, own, best_face[i, own], uv[0], uv[1], xi, r, body_faces, body_prev, body_now,
+                                     has, point, normal, body_disp)
+    for p in range(P):
+        g = best_face[i, p]
+        if p != own and g >= 0:
+            uv = best_bary[i, p]
+            if not part_border(body_face_border[g], uv[0], uv[1]):
+                push = push + set_body_plane(i, p, g, uv[0], uv[1], xi, r, body_faces, body_prev, body_now, has,
+                                             point, normal, body_disp)
     if active[i] != 0:
         x[i] = xi + push
         inertia_target[i] = inertia_target[i] + push

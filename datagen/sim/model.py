@@ -122,13 +122,11 @@ class ClothHostArrays:
     """[first, end) body vertex of every scene, [S, 2]."""
     body_face_range: np.ndarray
     """[first, end) body face of every scene, [S, 2]."""
-    part_faces: np.ndarray
-    """Body faces grouped by (scene, part), slot ``scene * P + part`` (global face ids), [Fb]."""
-    part_face_range: np.ndarray
-    """[first, end) of every slot in ``part_faces``, [S * P, 2]."""
-    part_edge_flags: np.ndarray
-    """Per entry of ``part_faces``: bit k set when the face's edge from corner k to k+1 is on the
-    part's border (a closest point there belongs to the neighbouring part), [Fb]."""
+    body_part_count: int
+    """P: body parts (the largest part index + 1 over the batch)."""
+    body_face_border: np.ndarray
+    """Per body face: bit k set when the face's edge from corner k to k+1 is on its part's border
+    (a closest point there belongs to the neighbouring part), [Fb]."""
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -218,12 +216,8 @@ class ClothModel:
     """Body part of every body face, int32 [Fb]."""
     body_face_base: wp.array
     """First body face of every scene, int32 [S]."""
-    part_faces: wp.array
-    """Body faces grouped by slot ``scene * P + part``, int32 [Fb]."""
-    part_face_base: wp.array
-    """First entry in ``part_faces`` of every slot, int32 [S * P]."""
-    part_edge_flags: wp.array
-    """Border-edge bits of every entry of ``part_faces``, int32 [Fb]."""
+    body_face_border: wp.array
+    """Part-border edge bits of every body face, int32 [Fb]."""
 
 
 @dataclass(frozen=True)
@@ -297,9 +291,8 @@ class _Bodies:
     vert_scene: np.ndarray
     ranges: np.ndarray
     face_range: np.ndarray
-    part_faces: np.ndarray
-    part_face_range: np.ndarray
-    part_edge_flags: np.ndarray
+    part_count: int
+    face_border: np.ndarray
     missing: tuple[int, ...]
 
 
@@ -386,8 +379,8 @@ class ClothModelBuilder:
             colours=_scene_colours(topo.conflicts, g.scene, particle_range), particle_range=particle_range,
             face_range=face_range, edge_range=edge_range, body_rest=bodies.rest, body_faces=bodies.faces,
             body_face_part=bodies.face_part, body_vert_scene=bodies.vert_scene, body_ranges=bodies.ranges,
-            body_face_range=bodies.face_range, part_faces=bodies.part_faces, part_face_range=bodies.part_face_range,
-            part_edge_flags=bodies.part_edge_flags)
+            body_face_range=bodies.face_range, body_part_count=bodies.part_count,
+            body_face_border=bodies.face_border)
         return _upload(host, device, scene_count=scene_count, scenes_without_body=bodies.missing)
 
     def _gather(self) -> _Gathered:
@@ -416,8 +409,8 @@ class ClothModelBuilder:
 
     def _body_arrays(self, scene_count: int) -> _Bodies:
         """Every scene's body concatenated in scene order (a scene without a body gets a tiny
-        far-away triangle, so no query ever finds it), its ranges and its faces grouped by part
-        (:func:`_body_parts`); and the scenes without a body."""
+        far-away triangle, so no query ever finds it), its ranges, its part count and the
+        part-border edges of its faces (:func:`_part_borders`); and the scenes without a body."""
         missing = sorted(set(range(scene_count)) - set(self._bodies))
         bv, bf, bp, bs, bbase, body_ranges = [], [], [], [], 0, []
         for s in range(scene_count):
@@ -433,10 +426,10 @@ class ClothModelBuilder:
             body_ranges.append((bbase, bbase + len(v)))
             bbase += len(v)
         body_faces, body_face_part, vert_scene = np.concatenate(bf), np.concatenate(bp), np.concatenate(bs)
-        part_faces, part_edge_flags, part_face_range = _body_parts(body_faces, body_face_part, vert_scene, scene_count)
         return _Bodies(rest=np.concatenate(bv), faces=body_faces, face_part=body_face_part, vert_scene=vert_scene,
                        ranges=np.array(body_ranges), face_range=_bounds(vert_scene[body_faces[:, 0]], scene_count),
-                       part_faces=part_faces, part_face_range=part_face_range, part_edge_flags=part_edge_flags,
+                       part_count=int(body_face_part.max()) + 1,
+                       face_border=_part_borders(body_faces, body_face_part),
                        missing=tuple(missing))
 
 
@@ -550,7 +543,7 @@ def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_with
         return ClothModel(
             device=device, particle_count=len(h.rest_positions), face_count=len(h.faces), edge_count=len(h.edges),
             scene_count=scene_count, body_vertex_count=len(h.body_rest),
-            body_part_count=len(h.part_face_range) // scene_count, scenes_without_body=scenes_without_body, host=h,
+            body_part_count=h.body_part_count, scenes_without_body=scenes_without_body, host=h,
             rest_positions=f32(h.rest_positions, wp.vec3), mass=f32(h.mass), vertex_area=f32(h.vertex_area),
             active=i32(h.active), particle_scene=i32(h.particle_scene), damping=f32(h.damping),
             friction=f32(h.friction), faces=i32(h.faces), dm_inv=f32(h.dm_inv, wp.mat22), tri_area=f32(h.tri_area),
@@ -559,32 +552,20 @@ def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_with
             v2f_offsets=i32(h.v2f_offsets), v2f=i32(h.v2f), v2e_offsets=i32(h.v2e_offsets), v2e=i32(h.v2e),
             nbr_offsets=i32(h.nbr_offsets), nbr=i32(h.nbr), colours=[i32(c) for c in h.colours],
             body_rest=f32(h.body_rest, wp.vec3), body_faces=i32(h.body_faces), body_face_part=i32(h.body_face_part),
-            body_face_base=i32(h.body_face_range[:, 0]), part_faces=i32(h.part_faces),
-            part_face_base=i32(h.part_face_range[:, 0]), part_edge_flags=i32(h.part_edge_flags))
+            body_face_base=i32(h.body_face_range[:, 0]), body_face_border=i32(h.body_face_border))
 
 
-def _body_parts(body_faces: np.ndarray, face_part: np.ndarray, vert_scene: np.ndarray,
-                scene_count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Every scene's body faces grouped by part, slot ``scene * P + part`` (P = the largest part + 1):
-    ``part_faces`` (global face ids, slot by slot), ``part_edge_flags`` (bit k: the face's edge
-    from corner k to corner k+1 is on the part's border, where it meets another part: a closest
-    point there belongs to the other part) and ``part_face_range`` [S*P, 2], in that order."""
-    P = int(face_part.max()) + 1
-    face_scene = vert_scene[body_faces[:, 0]]
-    faces, flags, ranges = [], [], []
-    start = 0
-    for s in range(scene_count):
-        for p in range(P):
-            sel = np.flatnonzero((face_scene == s) & (face_part == p))
-            F = body_faces[sel]
-            e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], 2).reshape(-1, 2), axis=1)
-            _, inv, count = np.unique(e, axis=0, return_inverse=True, return_counts=True)
-            border = (count[inv.ravel()] == 1).reshape(-1, 3)
-            faces.append(sel)
-            flags.append((border * np.array([1, 2, 4])).sum(1))
-            ranges.append((start, start + len(sel)))
-            start += len(sel)
-    return np.concatenate(faces), np.concatenate(flags), np.array(ranges, dtype=np.int64)
+def _part_borders(body_faces: np.ndarray, face_part: np.ndarray) -> np.ndarray:
+    """Per body face [Fb] (int32): bit k set when its edge from corner k to corner k+1 is on its
+    part's border (where it meets another part, or the mesh's own boundary): no other face of the
+    same part shares it. Vertex ids are global, so scenes never share an edge."""
+    F = np.asarray(body_faces, dtype=np.int64)
+    e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], 2), axis=2)  # [Fb, 3, 2]
+    part = np.repeat(np.asarray(face_part, dtype=np.int64), 3)
+    keys = np.concatenate([part[:, None], e.reshape(-1, 2)], axis=1)
+    _, inv, count = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    border = (count[inv.ravel()] == 1).reshape(-1, 3)
+    return (border * np.array([1, 2, 4])).sum(1).astype(np.int32)
 
 
 def _checked_mesh(vertices, faces, what: str) -> tuple[np.ndarray, np.ndarray]:

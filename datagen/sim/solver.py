@@ -219,10 +219,12 @@ class SolverVBD:
             wp.launch(D.edge_bounds, ne, inputs=[m.rest_positions, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
             self.face_lo, self.face_hi = z3(nf), z3(nf)
             wp.launch(D.face_bounds, nf, inputs=[m.rest_positions, m.faces, self.face_lo, self.face_hi])
-            # one body mesh per scene over views of the flat arrays (its closest-point and winding
-            # queries have no group root in warp 1.19); the cloth's faces and edges are each one BVH
-            # with a group per scene: one refit per detection for the whole batch, queries start at
-            # their scene's group root, and the pair lists are sorted, so nothing depends on the batch
+            # one body mesh per scene over views of the flat arrays (its closest-point, box and
+            # winding queries have no group root in warp 1.19; the contact search takes every
+            # part's closest point from one box query of it, so no part needs a tree of its own);
+            # the cloth's faces and edges are each one BVH with a group per scene: one refit per
+            # detection for the whole batch, queries start at their scene's group root, and the
+            # pair lists are sorted, so nothing depends on the batch
             h = m.host
             self.body_meshes = []
             for s in range(m.scene_count):
@@ -231,24 +233,13 @@ class SolverVBD:
                 self.body_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
                     (h.body_faces[bf0:bf1] - b0).astype(np.int32).ravel())))
             self.body_ids = wp.array([x.id for x in self.body_meshes], dtype=wp.uint64)
-            # and one mesh per body part of each scene (slot scene * P + part; id 0 for a part
-            # without faces), over the same vertex views
-            self.part_meshes, part_ids = [], []
-            for s in range(m.scene_count):
-                b0, b1 = h.body_ranges[s]
-                for p in range(P):
-                    f0, f1 = h.part_face_range[s * P + p]
-                    if f1 == f0:
-                        part_ids.append(0)
-                        continue
-                    self.part_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
-                        (h.body_faces[h.part_faces[f0:f1]] - b0).astype(np.int32).ravel())))
-                    part_ids.append(self.part_meshes[-1].id)
-            self.part_ids = wp.array(np.array(part_ids, dtype=np.uint64), dtype=wp.uint64)
+            self.body_best_dist = wp.zeros((n, P), dtype=float)  # detect_body's scratch
+            self.body_best_face = wp.zeros((n, P), dtype=wp.int32)
+            self.body_best_bary = wp.zeros((n, P), dtype=wp.vec2)
             # on CUDA the meshes' refits (a few short launches each, every substep) go round several
             # streams, so a captured graph runs them side by side instead of one after another
             dev = wp.get_device(m.device)
-            meshes = len(self.body_meshes) + len(self.part_meshes)
+            meshes = len(self.body_meshes)
             self._refit_streams = [wp.Stream(dev) for _ in range(min(REFIT_STREAMS, meshes))] if dev.is_cuda else []
             scene_of = h.particle_scene
             self.face_bvh = wp.Bvh(self.face_lo, self.face_hi,
@@ -318,7 +309,7 @@ class SolverVBD:
         current stream's work and that it waits for in turn: the refits are independent)."""
         import warp as wp
 
-        meshes = self.body_meshes + self.part_meshes
+        meshes = self.body_meshes
         streams = self._refit_streams
         if not streams:
             for mesh in meshes:
@@ -516,12 +507,12 @@ class SolverVBD:
                 self._refit_body()
                 wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
                                                      c.air_drag, h, self.x_prev, self.y, state.pinned_target])
-                wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, self.part_ids, m.part_face_base,
-                                                    m.part_faces, m.part_edge_flags, m.body_face_part,
-                                                    self.x_prev, m.particle_scene,
+                wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, m.body_face_part,
+                                                    m.body_face_border, self.x_prev, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
-                                                    self.body_radius, m.active, self.y, self.body_has, self.body_point,
-                                                    self.body_normal, self.body_disp])
+                                                    self.body_radius, m.active, self.y, self.body_best_dist,
+                                                    self.body_best_face, self.body_best_bary, self.body_has,
+                                                    self.body_point, self.body_normal, self.body_disp])
                 if c.body_friction:
                     wp.launch(K.predict_body_friction, n, inputs=[
                         self.x_prev, m.mass, m.active, self.body_has, self.body_normal, self.body_disp,
