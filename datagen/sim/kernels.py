@@ -167,15 +167,24 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
                         scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
                         body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
                         radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32), h: float, reach: float,
-                        x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), projected: wp.array(dtype=wp.int32)):
+                        x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), projected: wp.array(dtype=wp.int32),
+                        again: int, inside: wp.array(dtype=wp.int32)):
     """Hard non-penetration at the end of a substep: a vertex inside the body (winding number, the
     same test as the penetration metric) moves to its closest body point plus half its contact
     radius along the face normal, and loses the velocity with which it moved into the body relative
     to the body's own velocity there (an inelastic impact; the tangential part is kept). The
     penalty contact does the work in the solve; this catches what it leaves inside, where one
     closest-point plane per vertex is not enough (armpits, crotch, between the legs) or the body
-    moves faster than the penalty can push."""
+    moves faster than the penalty can push.
+
+    ``again`` 0: a first pass, which marks in ``inside`` the vertices it found inside; 1: a
+    second pass, which looks at those alone (the others have not moved since the first pass
+    found them outside, and the body has not moved either, so it would find them outside again)."""
     i = wp.tid()
+    if again == 0:
+        inside[i] = 0
+    elif inside[i] == 0:
+        return
     if active[i] == 0:
         return
     s = scene[i]
@@ -183,6 +192,7 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
     q = wp.mesh_query_point_sign_winding_number(mesh, x[i], query, 2.0, 0.5)
     if not q.result or q.sign >= 0.0:
         return
+    inside[i] = 1
     p, n, disp = body_surface_point(body_face_base[s] + q.face, q.u, q.v, body_faces, body_prev, body_now)
     if wp.length(n) == 0.0:
         return

@@ -251,6 +251,7 @@ class SolverVBD:
             self.ee_count = wp.zeros(ne, dtype=wp.int32)
             self.needed = wp.zeros(3, dtype=wp.int32)
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
+            self.projection_inside = wp.zeros(n, dtype=wp.int32)  # the projection's first pass found it inside
             self.untangle_push = wp.zeros((n, 3), dtype=wp.int32)  # untangle_kernels.PUSH_SCALE units
             self.untangle_hits = wp.zeros(n, dtype=wp.int32)  # crossings each vertex is part of
             self.untangle_edges = wp.zeros(ne, dtype=wp.int32)  # edges that crossed at the first iteration
@@ -559,8 +560,8 @@ class SolverVBD:
                                                         self.body_lambda, self.slip])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v, self.v_old])
                 if c.body_projection:
-                    for _ in range(2):  # a second pass for vertices the first put into another body part
+                    for again in range(2):  # a second pass for vertices the first put into another body part
                         wp.launch(K.project_out_of_body, n, inputs=[
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
                             self.body_sub, 2.0 * c.body_query, self.body_radius, m.active, h, c.projection_reach, x, v,
-                            self.projected])
+                            self.projected, again, self.projection_inside])
