@@ -445,7 +445,9 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     prefetch = ThreadPoolExecutor(1)
     upcoming = prefetch.submit(posed, schedule[0]) if schedule else None
     try:
+        frame_seconds: list[float] = []
         for f, _src in enumerate(schedule):
+            t_frame = time.perf_counter()
             control.set(upcoming.result())
             if f + 1 < len(schedule):
                 upcoming = prefetch.submit(posed, schedule[f + 1])
@@ -464,6 +466,12 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                             solver.freeze(state_a, s)
             if f >= recorded_from:
                 positions.append(state_a.positions.numpy().copy())  # on the CPU .numpy() is a view of the buffer
+            frame_seconds.append(time.perf_counter() - t_frame)
+            typical = float(np.median(frame_seconds[-30:]))
+            if f >= 10 and frame_seconds[-1] > max(10.0, 10.0 * typical):
+                log.warning("frame %d took %.1f s (typical %.2f s; cloth-cloth contact lists %d per element, grown %d "
+                            "times)", f, frame_seconds[-1], typical, getattr(solver, "capacity", 0),
+                            getattr(solver, "contact_growths", 0))
             if progress:
                 progress(f + 1, len(schedule))
     finally:

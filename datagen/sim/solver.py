@@ -7,11 +7,14 @@ with the body moving linearly from the previous control to ``control`` within th
 
 from __future__ import annotations
 
+import logging
 from dataclasses import dataclass, field
 
 import numpy as np
 
 from datagen.errors import InputError, SimulationError
+
+log = logging.getLogger(__name__)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -352,6 +355,8 @@ class SolverVBD:
                 return
             self.contact_growths += 1
             self._allocate_contacts(int(need * 1.5) + 1)
+            log.info("cloth-cloth contact lists grown to %d per element (a step needed %d; %d scenes, %d vertices); "
+                     "the step is redone", self.capacity, need, self.model.scene_count, self.model.particle_count)
             for a, b in zip(lagged, self._lagged_saved):
                 wp.copy(a, b)
             if state_out is state_in:
