@@ -36,6 +36,7 @@ class Plan:
         self.config = config
         self._garments: dict[int, object] = {}  # instance -> GarmentMesh, built on first use
         self._correspondences: dict[int, dict] = {}  # instance -> garment_correspondence(...)
+        self._motion_cache: dict[int, object] = {}  # motion index -> Motion, made on first use
         self.fit_diagnostics: dict | None = None  # set by static_groups()
         self.bodies: list[str] = []
         self.motions: list[str] = []
@@ -79,6 +80,13 @@ class Plan:
         return np.stack(out)
 
     def motion(self, m: int):
+        """Motion m (made once per process: a batch's scenes that share it share one object, so
+        the simulator poses the body over it once)."""
+        if m not in self._motion_cache:
+            self._motion_cache[m] = self._make_motion(m)
+        return self._motion_cache[m]
+
+    def _make_motion(self, m: int):
         from datagen.motion.library import make_motion
 
         frames = self.run_config.motion_frames(self.config.frames, self.config.fps)

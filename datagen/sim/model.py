@@ -412,13 +412,18 @@ class ClothModelBuilder:
         far-away triangle, so no query ever finds it), its ranges, its part count and the
         part-border edges of its faces (:func:`_part_borders`); and the scenes without a body."""
         missing = sorted(set(range(scene_count)) - set(self._bodies))
-        bv, bf, bp, bs, bbase, body_ranges = [], [], [], [], 0, []
+        bv, bf, bp, bs, bbase, body_ranges, borders, known = [], [], [], [], 0, [], [], {}
         for s in range(scene_count):
             if s in self._bodies:
                 v, f, part = self._bodies[s]
             else:
                 v, f = np.array([[0.0, -1e4, 0.0], [1e-3, -1e4, 0.0], [0.0, -1e4, 1e-3]]), np.array([[0, 1, 2]])
                 part = np.zeros(1, dtype=np.int32)
+            # the border bits depend on the faces and parts alone (local ids): once per distinct body
+            key = (np.asarray(f).tobytes(), np.asarray(part).tobytes())
+            if key not in known:
+                known[key] = _part_borders(f, part)
+            borders.append(known[key])
             bv.append(v)
             bf.append(f + bbase)
             bp.append(part)
@@ -429,7 +434,7 @@ class ClothModelBuilder:
         return _Bodies(rest=np.concatenate(bv), faces=body_faces, face_part=body_face_part, vert_scene=vert_scene,
                        ranges=np.array(body_ranges), face_range=_bounds(vert_scene[body_faces[:, 0]], scene_count),
                        part_count=int(body_face_part.max()) + 1,
-                       face_border=_part_borders(body_faces, body_face_part),
+                       face_border=np.concatenate(borders),
                        missing=tuple(missing))
 
 
@@ -558,7 +563,7 @@ def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_with
 def _part_borders(body_faces: np.ndarray, face_part: np.ndarray) -> np.ndarray:
     """Per body face [Fb] (int32): bit k set when its edge from corner k to corner k+1 is on its
     part's border (where it meets another part, or the mesh's own boundary): no other face of the
-    same part shares it. Vertex ids are global, so scenes never share an edge."""
+    same part shares it."""
     F = np.asarray(body_faces, dtype=np.int64)
     e = np.sort(np.stack([F, np.roll(F, -1, axis=1)], 2), axis=2)  # [Fb, 3, 2]
     part = np.repeat(np.asarray(face_part, dtype=np.int64), 3)

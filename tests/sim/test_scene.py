@@ -100,3 +100,32 @@ def test_a_failed_scene_is_frozen_and_the_other_scenes_do_not_change(monkeypatch
     assert np.array_equal(frozen[1].positions[:k + 1], free[1].positions[:k + 1])  # the same until it failed
     heights = free[1].positions[k:, :, 1].mean(axis=1)  # run to the end, it keeps falling
     assert np.all(np.diff(heights) < -1e-4)
+
+
+def test_batch_poses_each_body_motion_once_and_gives_each_scene_its_own_arrays(small_model, monkeypatch):
+    """A batch of three garments over two motions poses the body twice (once per motion), and every
+    scene's arrays equal those made for it alone."""
+    import dataclasses
+
+    from datagen.motion.library import make_motion
+
+    betas = np.zeros(10)
+    walk, wave = make_motion("walk", seed=0, frames=12, fps=30.0), make_motion("wave", seed=0, frames=12, fps=30.0)
+    v = np.asarray(small_model.shaped(betas.reshape(1, -1)))[0]
+    garment = type("G", (), {})()  # the fields scene_arrays reads from a garment
+    garment.vertices, garment.faces, garment.material = v[:30].copy(), np.array([[0, 1, 2], [1, 2, 3]]), MATERIALS["silk"]
+    garment.material_frames = lambda: np.tile(np.eye(2, 3), (2, 1, 1))
+    garment.weft_rest_scale = lambda: np.ones(2)
+    scenes = [sc.Scene(garment=garment, body=small_model, betas=betas, motion=m) for m in (walk, wave, walk)]
+    calls = []
+    real = sc._posed_body
+    monkeypatch.setattr(sc, "_posed_body", lambda s, lead_in: calls.append(id(s.motion)) or real(s, lead_in))
+    batch = sc.batch_arrays(scenes, 0.2)
+    assert sorted(calls) == sorted([id(walk), id(wave)])
+    for s, a in zip(scenes, batch, strict=True):
+        alone = sc.scene_arrays(s, 0.2)
+        for f in dataclasses.fields(alone):
+            x, y = getattr(alone, f.name), getattr(a, f.name)
+            if isinstance(x, np.ndarray):
+                np.testing.assert_array_equal(x, y, err_msg=f.name)
+    assert not np.array_equal(batch[0].body_frames, batch[1].body_frames)
