@@ -67,7 +67,8 @@ def warp_mesh(vertices: np.ndarray, faces: np.ndarray, device: str | None = "cpu
     """A warp mesh of ``vertices`` [V, 3] (m) and ``faces`` [F, 3] on ``device``."""
     return wp.Mesh(points=wp.array(np.ascontiguousarray(vertices, dtype=np.float32), dtype=wp.vec3, device=device),
                    indices=wp.array(np.ascontiguousarray(faces, dtype=np.int32).ravel(), dtype=wp.int32,
-                                    device=device))
+                                    device=device),
+                   support_winding_number=True)
 
 
 def _points(points: np.ndarray, device) -> wp.array:

@@ -148,7 +148,8 @@ class BodyProbe:
         pts = wp.array(verts.astype(np.float32), dtype=wp.vec3, device=self.device)
         tpts = wp.array(verts.astype(np.float32), dtype=wp.vec3, device=self.device)
         if self._mesh is None:
-            self._mesh = wp.Mesh(points=pts, indices=wp.array(self.faces.ravel(), dtype=wp.int32, device=self.device))
+            self._mesh = wp.Mesh(points=pts, indices=wp.array(self.faces.ravel(), dtype=wp.int32, device=self.device),
+                                 support_winding_number=True)
             self._torso = wp.Mesh(points=tpts, indices=wp.array(self.faces[self.torso_faces].ravel(),
                                                                 dtype=wp.int32, device=self.device))
         else:

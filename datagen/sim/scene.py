@@ -316,7 +316,8 @@ BYTES_PER_GARMENT_VERTEX = 6_000
 the contact buffers to grow."""
 
 BYTES_PER_BODY_VERTEX = 400
-"""Device memory a body vertex takes (posed copies, the body's and its parts' meshes) [bytes]."""
+"""Device memory a body vertex takes (posed copies, the body's mesh with its tree and winding-number
+data) [bytes]; an upper bound since the part meshes went (2026-11-27)."""
 
 _MEMORY_ADVICE = ("Simulate fewer scenes at once (the dataset config's simulation.batch_size), coarser garments "
                   "(a larger garment_edge_length) or use a device with more memory.")

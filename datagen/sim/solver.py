@@ -234,7 +234,7 @@ class SolverVBD:
                 b0, b1 = h.body_ranges[s]
                 bf0, bf1 = h.body_face_range[s]
                 self.body_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
-                    (h.body_faces[bf0:bf1] - b0).astype(np.int32).ravel())))
+                    (h.body_faces[bf0:bf1] - b0).astype(np.int32).ravel()), support_winding_number=True))
             self.body_ids = wp.array([x.id for x in self.body_meshes], dtype=wp.uint64)
             self.body_best_dist = wp.zeros((n, P), dtype=float)  # detect_body's scratch
             self.body_best_face = wp.zeros((n, P), dtype=wp.int32)
