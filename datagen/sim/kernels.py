@@ -276,15 +276,21 @@ def set_body_plane(i: int, p: int, f: int, u: float, v: float, xi: wp.vec3, r: f
     return wp.vec3(0.0)
 
 
+MAX_BODY_PARTS = 8
+"""The most body parts a batch may have (:func:`detect_body` keeps a closest point per part in
+registers); ``ClothModelBuilder.add_body`` refuses part numbers outside 0..7. drape's bodies
+have 5 (``datagen.body.skeleton.BODY_PARTS``)."""
+part_floats = wp.types.vector(length=MAX_BODY_PARTS, dtype=float)
+part_ints = wp.types.vector(length=MAX_BODY_PARTS, dtype=wp.int32)
+
+
 @wp.kernel
 def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
                 body_face_part: wp.array(dtype=wp.int32), body_face_border: wp.array(dtype=wp.int32),
                 x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
                 body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
                 radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
-                inertia_target: wp.array(dtype=wp.vec3), best_dist: wp.array2d(dtype=float),
-                best_face: wp.array2d(dtype=wp.int32), best_bary: wp.array2d(dtype=wp.vec2),
-                has: wp.array2d(dtype=wp.int32), point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
+                inertia_target: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32), point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
                 body_disp: wp.array2d(dtype=wp.vec3)):
     """Contact planes of each cloth vertex with the body (this substep's pose), one slot per body
     part: the closest point of the whole body within ``query`` (in its part's slot), and the
@@ -296,8 +302,9 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     then threw it out a hand's width away, tearing its triangles.
 
     One box query of the scene's body mesh (every face whose bounds come within ``query``) gives
-    every part's closest point at once (``best_*``: scratch, [N, P]); the whole body's is the
-    nearest of them. So only the whole body's tree is refitted each substep, not one per part.
+    every part's closest point at once (kept per part in the thread's own vectors, at most
+    :data:`MAX_BODY_PARTS`); the whole body's is the nearest of them. So only the whole body's
+    tree is refitted each substep, not one per part.
 
     A vertex that the body's move has put closer than a plane's contact radius (or just behind
     it: less than two radii) is first moved out along the normal (the pushes of its planes
@@ -305,10 +312,12 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     conservative move bound (which is measured from these positions)."""
     i = wp.tid()
     P = has.shape[1]
+    best_dist = part_floats(query)
+    best_face = part_ints(-1)
+    best_u = part_floats(0.0)
+    best_v = part_floats(0.0)
     for p in range(P):
         has[i, p] = 0
-        best_dist[i, p] = query
-        best_face[i, p] = -1
     s = scene[i]
     xi = x[i]
     r = radius[i]
@@ -323,28 +332,27 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
         w = triangle_closest_bary(xi, a, b, c)
         d = wp.length(xi - (a * w[0] + b * w[1] + c * w[2]))
         p = body_face_part[g]
-        if d < best_dist[i, p] or (d == best_dist[i, p] and best_face[i, p] >= 0 and g < best_face[i, p]):
-            best_dist[i, p] = d
-            best_face[i, p] = g
-            best_bary[i, p] = wp.vec2(w[0], w[1])
+        if d < best_dist[p] or (d == best_dist[p] and best_face[p] >= 0 and g < best_face[p]):
+            best_dist[p] = d
+            best_face[p] = g
+            best_u[p] = w[0]
+            best_v[p] = w[1]
     own = int(-1)  # noqa: UP018, RUF046 (warp: a mutable int in the loop)
     nearest = float(query)  # noqa: RUF046 (warp: a mutable float in the loop)
     for p in range(P):
-        if best_face[i, p] >= 0 and (own < 0 or best_dist[i, p] < nearest):
+        if best_face[p] >= 0 and (own < 0 or best_dist[p] < nearest):
             own = p
-            nearest = best_dist[i, p]
+            nearest = best_dist[p]
     push = wp.vec3(0.0)
     if own >= 0:
-        uv = best_bary[i, own]
-        push = push + set_body_plane(i, own, best_face[i, own], uv[0], uv[1], xi, r, body_faces, body_prev, body_now,
-                                     has, point, normal, body_disp)
+        push = push + set_body_plane(i, own, best_face[own], best_u[own], best_v[own], xi, r, body_faces, body_prev,
+                                     body_now, has, point, normal, body_disp)
     for p in range(P):
-        g = best_face[i, p]
+        g = best_face[p]
         if p != own and g >= 0:
-            uv = best_bary[i, p]
-            if not part_border(body_face_border[g], uv[0], uv[1]):
-                push = push + set_body_plane(i, p, g, uv[0], uv[1], xi, r, body_faces, body_prev, body_now, has,
-                                             point, normal, body_disp)
+            if not part_border(body_face_border[g], best_u[p], best_v[p]):
+                push = push + set_body_plane(i, p, g, best_u[p], best_v[p], xi, r, body_faces, body_prev, body_now,
+                                             has, point, normal, body_disp)
     if active[i] != 0:
         x[i] = xi + push
         inertia_target[i] = inertia_target[i] + push

@@ -236,9 +236,6 @@ class SolverVBD:
                 self.body_meshes.append(wp.Mesh(points=self.body_sub[int(b0):int(b1)], indices=wp.array(
                     (h.body_faces[bf0:bf1] - b0).astype(np.int32).ravel()), support_winding_number=True))
             self.body_ids = wp.array([x.id for x in self.body_meshes], dtype=wp.uint64)
-            self.body_best_dist = wp.zeros((n, P), dtype=float)  # detect_body's scratch
-            self.body_best_face = wp.zeros((n, P), dtype=wp.int32)
-            self.body_best_bary = wp.zeros((n, P), dtype=wp.vec2)
             # on CUDA the meshes' refits (a few short launches each, every substep) go round several
             # streams, so a captured graph runs them side by side instead of one after another
             dev = wp.get_device(m.device)
@@ -516,8 +513,7 @@ class SolverVBD:
                 wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, m.body_face_part,
                                                     m.body_face_border, self.x_prev, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
-                                                    self.body_radius, m.active, self.y, self.body_best_dist,
-                                                    self.body_best_face, self.body_best_bary, self.body_has,
+                                                    self.body_radius, m.active, self.y, self.body_has,
                                                     self.body_point, self.body_normal, self.body_disp])
                 if c.body_friction:
                     wp.launch(K.predict_body_friction, n, inputs=[
