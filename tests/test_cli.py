@@ -90,3 +90,14 @@ def test_missing_optional_dependency_says_how_to_install(capsys, tmp_path, monke
     monkeypatch.setitem(sys.modules, "pxr", None)  # makes `import pxr` fail as if usd-core were absent
     code, _, err = run(capsys, "body", "export", "--out", str(tmp_path / "a.usda"))
     assert code == 2 and "needs the Python package 'pxr'" in err and "pip install 'drape[usd]'" in err
+
+
+def test_generate_batch_size_replaces_the_configs_and_is_checked(capsys, tmp_path):
+    """``--batch-size`` sets simulation.batch_size (an execution setting) over a preset; out of its
+    limits it is refused in one line."""
+    assert main(["generate", "--preset", "paper-motion", "--batch-size", "252", "--print-config",
+                 "--out", str(tmp_path / "s")]) == 0
+    assert json.loads(capsys.readouterr().out)["simulation"]["batch_size"] == 252
+    assert main(["generate", "--preset", "paper-motion", "--batch-size", "0", "--out", str(tmp_path / "s")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == "error: --batch-size must be in 1..4096, got 0"

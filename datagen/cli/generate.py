@@ -20,7 +20,9 @@ def register(sub, formatter) -> None:
                        "  drape generate my.toml --out my.zarr --device cuda\n"
                        "  drape generate --preset paper-gnn --out gnn.zarr --executor ray --device cuda\n"
                        "  drape generate --preset paper-motion --out motion.zarr --device cuda --time-limit 50   "
-                       "(again until it exits 0)")
+                       "(again until it exits 0)\n"
+                       "  drape generate --preset paper-motion --out motion.zarr --device cuda --batch-size 252   "
+                       "(one batch)")
     p.add_argument("config", nargs="?", default=None, help="dataset config (.toml/.yaml); default: --preset tiny")
     p.add_argument("--preset", default=None, help="tiny (default), small, paper-gnn, paper-motion")
     p.add_argument("--out", required=True, help="the store directory")
@@ -34,6 +36,10 @@ def register(sub, formatter) -> None:
                    help="local executor: start no batch that would not end within this many minutes (judged by the "
                         "last batch); what is simulated stays staged, the same command continues it, and the exit "
                         "status is 75 while the store is unfinished")
+    p.add_argument("--batch-size", type=int, default=None, metavar="N",
+                   help="scenes simulated together in one model, in place of the config's simulation.batch_size "
+                        "(how the work is spread, not part of the store's identity: a run may be resumed with "
+                        "another); e.g. a whole preset in one batch on a large GPU")
     p.add_argument("--print-config", action="store_true", help="print the resolved config and stop")
     p.set_defaults(func=_cmd_generate)
     p = sub.add_parser("validate", formatter_class=formatter, help="check a store against schemas/dataset.py",
@@ -65,12 +71,14 @@ INCOMPLETE = 75
 
 
 def _cmd_generate(args) -> int:
-    from datagen.generate.config import resolve_config
+    from datagen.generate.config import resolve_config, with_batch_size
     from datagen.generate.plan import Plan
     from datagen.generate.run import generate
     from datagen.store import format_store_info, store_info, validate
 
     config = resolve_config(args.config, args.preset)
+    if args.batch_size is not None:
+        config = with_batch_size(config, args.batch_size)
     if args.print_config:
         print(json.dumps(config.as_dict(), indent=2))
         return 0

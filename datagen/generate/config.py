@@ -277,6 +277,15 @@ PRESETS: dict[str, dict] = {
 }
 
 
+def with_batch_size(config: DatasetConfig, batch_size: int) -> DatasetConfig:
+    """``config`` with ``simulation.batch_size`` replaced (an execution setting, outside the store's
+    identity), checked against the field's limits like a config file's value."""
+    lo, hi = (SimulationConfig.__dataclass_fields__["batch_size"].metadata[k] for k in ("min", "max"))
+    if not lo <= int(batch_size) <= hi:
+        raise ConfigError(f"--batch-size must be in {lo}..{hi}, got {batch_size}")
+    return dataclasses.replace(config, simulation=dataclasses.replace(config.simulation, batch_size=int(batch_size)))
+
+
 def resolve_config(path: str | Path | None = None, preset: str | None = None) -> DatasetConfig:
     """The config from a file, or a preset (default ``tiny``); not both."""
     if path is not None and preset is not None:
