@@ -31,6 +31,10 @@ class TrainConfig:
         target_scale: the regression targets (metres) are multiplied by this in the loss (100: cm).
         max_train_frames: frames drawn (seeded, once) from the train split; None: all.
         max_val_frames: frames drawn from the validation split for the per-epoch error.
+        epoch_frames: frames an epoch trains on, drawn afresh (seeded) from the train split every
+            epoch; None: an epoch is the whole split. On a large store it makes the validation error
+            (the curves, early stopping, the plateau schedule, the best checkpoint) come more often
+            than once a pass, and a time limit lose at most one short epoch.
         max_minutes: stop training after this much wall time (None: no limit); the last finished
             epoch's checkpoints stay.
     """
@@ -48,6 +52,7 @@ class TrainConfig:
     target_scale: float = field(default=100.0, metadata={"min": 1e-3, "max": 1e6})
     max_train_frames: int | None = field(default=None, metadata={"min": 1})
     max_val_frames: int | None = field(default=256, metadata={"min": 1})
+    epoch_frames: int | None = field(default=None, metadata={"min": 1})
     max_minutes: float | None = field(default=None, metadata={"min": 0.1})
 
     def as_dict(self) -> dict:

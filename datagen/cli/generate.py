@@ -24,7 +24,7 @@ def register(sub, formatter) -> None:
                        "  drape generate --preset paper-motion --out motion.zarr --device cuda --batch-size 252   "
                        "(one batch)")
     p.add_argument("config", nargs="?", default=None, help="dataset config (.toml/.yaml); default: --preset tiny")
-    p.add_argument("--preset", default=None, help="tiny (default), small, paper-gnn, paper-motion")
+    p.add_argument("--preset", default=None, help="tiny (default), small, medium, paper-gnn, paper-motion")
     p.add_argument("--out", required=True, help="the store directory")
     p.add_argument("--executor", default="local", choices=("local", "ray"))
     p.add_argument("--workers", type=int, default=None,

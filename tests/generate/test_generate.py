@@ -296,7 +296,7 @@ def test_config_errors_say_what_is_wrong():
         resolve_config(preset="huge")
     with pytest.raises(ConfigError, match="substep"):
         load_config(DatasetConfig, {**MICRO, "simulation": {"substep": 3}})
-    assert set(PRESETS) == {"tiny", "small", "paper-gnn", "paper-motion"}
+    assert set(PRESETS) == {"tiny", "small", "medium", "paper-gnn", "paper-motion"}
     for name in PRESETS:
         resolve_config(preset=name)
     # paper 001 never uses α: its preset fits none (with one body per split it could not)

@@ -79,6 +79,9 @@ def test_evaluate_and_predict_end_to_end(trained, train_store, tmp_path):
     run, _ = trained
     e = evaluate_gnn(run, split="test", device="cpu")
     assert set(e["table"]) == {"fat", "all"} and e["frames"] == 6
+    # the micro store's test garment and motion are not in its train split: every frame is Table 2's
+    assert e["by_seen"] == {"unseen garments and poses": e["table"]}
+    assert e["table"]["all"]["coarse_to_detail"] > 0
     for key in ("coarse", "detail", "zero_coarse", "zero_detail", "skinned_detail"):
         assert np.isfinite(e["table"]["all"][key]) and e["table"]["all"][key] > 0
     assert 0 <= e["inside_body_share"] <= 1 and e["model_ms_per_frame"] > 0
@@ -218,3 +221,47 @@ def test_ablations_keep_the_full_models_size():
     for ablation in ("no_decomposition", "output_limit", "single_step", "no_pooling"):
         assert abs(size[ablation] / size["full"] - 1) < 0.05, (ablation, size)
     assert size["no_parser"] < size["full"] < size["concat_parser"]
+
+
+def test_seen_in_training_sorts_test_samples_by_what_the_train_split_holds():
+    """Table 1 (garment and motion both in the train split, here on another body) against Table 2
+    (neither), and the two mixed categories; a garment is its (type, seed) on whatever body."""
+    from training.gnn.run import SEEN, seen_in_training
+
+    class Store:  # the reader's surface that seen_in_training reads
+        garment_count = 3
+        # garment instances: tshirt:0 on body 0, tshirt:0 on body 1, tshirt:9 on body 1
+        _garments = [{"type": 0, "seed": 0}, {"type": 0, "seed": 0}, {"type": 0, "seed": 9}]
+        # samples: 0 train (tshirt:0, walk:0); then test: tshirt:0 walk:0, tshirt:9 walk:9,
+        # tshirt:0 walk:9, tshirt:9 walk:0
+        index = {"garment": np.array([0, 1, 2, 1, 2]), "motion": np.array([0, 0, 1, 1, 0])}
+
+        def garment(self, g):
+            return self._garments[g]
+
+        def motions(self):
+            return {"label": np.array([3, 3]), "seed": np.array([0, 9])}
+
+        def split(self, name):
+            return np.array([0]) if name == "train" else np.array([1, 2, 3, 4])
+
+    seen = seen_in_training(Store())
+    assert seen == {0: SEEN[True, True], 1: SEEN[True, True], 2: SEEN[False, False], 3: SEEN[True, False],
+                    4: SEEN[False, True]}
+    assert seen[1] == "garments and poses seen in training" and seen[2] == "unseen garments and poses"
+
+
+def test_epoch_frames_draws_a_fresh_subset_every_epoch():
+    from torch_geometric.data import Data
+
+    from training.gnn.run import _loader
+
+    ds = [Data(x=torch.tensor([[float(k)]]), num_nodes=1) for k in range(40)]
+    loader = _loader(ds, TrainConfig(batch_size=4, workers=0, epoch_frames=12), shuffle=True, accelerator="cpu")
+    epochs = [sorted(int(v) for b in loader for v in b.x[:, 0]) for _ in range(3)]
+    assert all(len(e) == len(set(e)) == 12 for e in epochs) and len(loader) == 3
+    assert epochs[0] != epochs[1] != epochs[2]
+    again = _loader(ds, TrainConfig(batch_size=4, workers=0, epoch_frames=12), shuffle=True, accelerator="cpu")
+    assert sorted(int(v) for b in again for v in b.x[:, 0]) == epochs[0]  # seeded
+    whole = _loader(ds, TrainConfig(batch_size=4, workers=0), shuffle=True, accelerator="cpu")
+    assert sorted(int(v) for b in whole for v in b.x[:, 0]) == list(range(40))
