@@ -265,3 +265,31 @@ def test_epoch_frames_draws_a_fresh_subset_every_epoch():
     assert sorted(int(v) for b in again for v in b.x[:, 0]) == epochs[0]  # seeded
     whole = _loader(ds, TrainConfig(batch_size=4, workers=0), shuffle=True, accelerator="cpu")
     assert sorted(int(v) for b in whole for v in b.x[:, 0]) == list(range(40))
+
+
+def test_the_magnitude_head_learns_small_targets():
+    """W_detail's targets are millimetres. With §5.1's ReLU as the magnitude's last activation the
+    head gave 0 at 99.6 % of the nodes from the first step and at all of them after ten (the loss
+    then sits at the targets' mean square for good, as on the `medium` store); with Softplus it
+    learns. A probe on four small grid garments and a smooth target of |Δ| ~ 0.3 (cm)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    from bench_gnn import grid_frame
+    from torch_geometric.data import Batch
+
+    from training.gnn.model import DetailNet
+
+    torch.manual_seed(0)
+    b = Batch.from_data_list([grid_frame(400, seed=s) for s in range(4)])
+    target = 0.3 * torch.tanh(b.x_detail[:, :3] + 0.5 * b.x_detail[:, 3:6])
+    net = DetailNet(30, 85)
+    opt = torch.optim.Adam(net.parameters(), lr=1e-3)
+    losses = []
+    for _ in range(60):
+        loss = torch.nn.functional.mse_loss(net(b.x_detail, b.edge_index, b.batch, b.attributes), target)
+        opt.zero_grad()
+        loss.backward()
+        opt.step()
+        losses.append(loss.item())
+    mean_square = target.pow(2).mean().item()
+    print(f"\ntargets' mean square {mean_square:.4f}; loss {losses[0]:.4f} -> {losses[-1]:.4f}")
+    assert losses[-1] < 0.7 * mean_square

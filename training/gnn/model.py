@@ -5,8 +5,9 @@
   features; the two streams are concatenated (half the width each: §5.1's first block is 256 = 128
   self + 4 x 32 attention).
 - :class:`CoarseNet` (W_coarse, eq. 5-6): one 256-wide block with Tanh, then a magnitude and a
-  direction branch of three blocks [512, 512, 256] and fully connected layers [256, 128, 1] (ReLU)
-  and [256, 128, 3] (Tanh, then normalised to unit length); Δ = |Δ| ⊙ δ (eq. 4).
+  direction branch of three blocks [512, 512, 256] and fully connected layers [256, 128, 1] (ReLU,
+  the last Softplus: see :class:`_Output`) and [256, 128, 3] (Tanh, then normalised to unit
+  length); Δ = |Δ| ⊙ δ (eq. 4).
 - :class:`ParserNet` (W_parser): (α, β, θ) through fully connected layers [256, 512, 1024], ReLU.
 - :class:`DetailNet` (W_detail, eq. 7-9): a 1024-wide block multiplied element-wise by the parser's
   encoding, then two branches of four blocks [256, 256, 128, 96] with edge-contraction pooling
@@ -122,14 +123,23 @@ model's parameters (twice the width, as before 2026-11-25, gave 1.45x)."""
 
 
 class _Output(nn.Module):
-    """Δ from node features: magnitude x unit direction (eq. 4), or one branch for the ablations."""
+    """Δ from node features: magnitude x unit direction (eq. 4), or one branch for the ablations.
+
+    The magnitude's last activation is Softplus where §5.1 has ReLU. Its hidden features come out
+    of ReLUs, so they are positive and alike from node to node, and the last layer's output has
+    about one sign over the whole graph: where that sign was negative at the start, or became so
+    while the direction was still random (the MSE then asks for |Δ| = 0), a ReLU gave 0 with zero
+    gradient at every node and the step never learned again. That happened to W_detail in every
+    run on the `medium` store (its training loss stayed at the targets' mean square for 13 epochs,
+    docs/training.md) and in a probe from the first steps (tests/training/test_gnn.py). Softplus is
+    positive, as a magnitude must be, and never without gradient."""
 
     def __init__(self, in_channels: int, widths: list[int], head: list[int], *, mode: str,
                  pool_after: int | None = None):
         super().__init__()
         self.mode = mode
         if mode == "decomposed":
-            self.magnitude = _Branch(in_channels, widths, [*head, 1], nn.ReLU, nn.ReLU(), pool_after=pool_after)
+            self.magnitude = _Branch(in_channels, widths, [*head, 1], nn.ReLU, nn.Softplus(), pool_after=pool_after)
             self.direction = _Branch(in_channels, widths, [*head, 3], nn.Tanh, nn.Tanh(), pool_after=pool_after)
         else:  # one branch, wider by ONE_BRANCH_SCALE: about the two branches' parameters
             wide = [8 * int(round(w * ONE_BRANCH_SCALE / 8)) for w in widths]  # GAT: 4 heads on each half
