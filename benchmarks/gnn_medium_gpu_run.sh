@@ -15,6 +15,9 @@ OUT=${OUT:-/tmp/gnn-medium-out}; PHASE=${PHASE:-gen}; STORE=${STORE:-/tmp/medium
 BUDGET=${BUDGET:-575}; T0=$(date +%s); DEADLINE=$((T0 + BUDGET)); DEVICE=${DEVICE:-cuda}
 GEN_ARGS=${GEN_ARGS:---preset medium}  # a config file instead, for a dry run on the CPU
 mkdir -p "$OUT" "$RUNS"
+# eight trainings and evaluations share 64 cores: without a limit each takes a thread per core
+# (on 2026-11-27 eight evaluations of 960 frames did not end in 290 s)
+export OMP_NUM_THREADS=${OMP_NUM_THREADS:-6}
 filter() { grep -v "^Module\|^Warp\|^   \|CUDA Toolkit\|Devices:\|Kernel cache"; }
 # name ablation seed gpu
 RUNLIST=${RUNLIST:-"full-s0:full:0:0 no_decomposition:no_decomposition:0:0 full-s1:full:1:1 output_limit:output_limit:0:1

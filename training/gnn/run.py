@@ -108,7 +108,11 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     by_seen: dict[str, dict[str, dict[str, list]]] = {}
     inside_total, vertex_total = 0, 0
     t_model, n_frames = 0.0, 0
-    for batch in DataLoader(ds, batch_size=4, shuffle=False, num_workers=0):
+    # the run's DataLoader workers read and derive the frames (spawned: each opens the store itself)
+    workers = int(meta["config"].get("workers", 0))
+    loader = DataLoader(ds, batch_size=4, shuffle=False, num_workers=workers,
+                        multiprocessing_context="spawn" if workers else None)
+    for batch in loader:
         batch = batch.to(dev)
         t = time.perf_counter()
         coarse, detail = module.predict_frames(batch)
