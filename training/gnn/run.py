@@ -166,8 +166,8 @@ def seen_in_training(store) -> dict[int, str]:
     """Sample -> its :data:`SEEN` category: whether its garment (type and seed; the instance on
     another body counts as seen) and its motion (label and seed) are among the train split's."""
     idx = store.index
-    gtype = np.array([int(store.garment(g)["type"]) for g in range(store.garment_count)])
-    gseed = np.array([int(store.garment(g)["seed"]) for g in range(store.garment_count)])
+    garment = [store.garment(g) for g in range(store.garment_count)]
+    gtype, gseed = (np.array([int(a[k]) for a in garment]) for k in ("type", "seed"))
     motions = store.motions()
     mkey = list(zip(motions["label"].tolist(), motions["seed"].tolist(), strict=True))
     train = store.split("train")
@@ -190,7 +190,6 @@ def format_evaluation(e: dict[str, Any]) -> str:
     lines = [f"{e['split']} split of {e['store']}: {e['frames']} frames, model {e['ablation']} "
              f"({e['parameters']:,} parameters, {e['model_mb']:.1f} MB), {e['model_ms_per_frame']:.1f} ms per frame "
              f"on {e['device']}",
-             "",
              "",
              "mean per-vertex error (mm): coarse = the coarse prediction against the coarse target, coarse→detail",
              "and detail = the coarse and the detailed prediction against the simulated garment; baselines: the",
