@@ -82,6 +82,8 @@ def test_evaluate_and_predict_end_to_end(trained, train_store, tmp_path):
     # the micro store's test garment and motion are not in its train split: every frame is Table 2's
     assert e["by_seen"] == {"unseen garments and poses": e["table"]}
     assert e["table"]["all"]["coarse_to_detail"] > 0
+    # the detail step alone, on the coarse target as trained, beside the coarse target's own error
+    assert e["table"]["all"]["truth_detail"] > 0 and e["table"]["all"]["truth_coarse_to_detail"] > 0
     for key in ("coarse", "detail", "zero_coarse", "zero_detail", "skinned_detail"):
         assert np.isfinite(e["table"]["all"][key]) and e["table"]["all"][key] > 0
     assert 0 <= e["inside_body_share"] <= 1 and e["model_ms_per_frame"] > 0

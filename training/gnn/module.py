@@ -48,6 +48,15 @@ class GNNModule(pl.LightningModule):
         dd = self.model.forward_detail(x, batch.edge_index, batch.batch, batch.attributes)
         return coarse, coarse + dd.float() / self.scale
 
+    def detail_on_truth(self, batch) -> torch.Tensor | None:
+        """W_detail as it is trained: on the ground-truth coarse mesh's features, added to it
+        ([N, 3], m); None for ``single_step``, which has no coarse mesh. Its error against the
+        simulated garment, beside the coarse target's own, measures the detail step alone."""
+        if self.model.coarse is None:
+            return None
+        dd = self.model.forward_detail(batch.x_detail, batch.edge_index, batch.batch, batch.attributes)
+        return batch.coarse + dd.float() / self.scale
+
     # -- steps
 
     def training_step(self, batch, _):
