@@ -1,0 +1,63 @@
+"""Paper 000's training input from a store against the same frames held in memory, in one run.
+
+The loader of ``drape train gnn`` (``training.gnn.run._loader``: torch_geometric's DataLoader over
+:class:`~training.data.FrameDataset`, spawned workers that open the store and derive the features)
+against a DataLoader over the same frames built beforehand and kept as ``Data`` objects (only
+batching left). Figures are frames per second over whole passes, after one warm-up pass (which
+starts the workers). If the first is well above a training step's rate (``bench_gnn.py``: 110-186
+frames/s on an H200), the loader is not what limits training.
+
+    python benchmarks/bench_gnn_loader.py STORE [--frames 240] [--workers 0,2,4] [--batch 8]
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from training.config import TrainConfig  # noqa: E402
+from training.data import FrameDataset  # noqa: E402
+from training.gnn.run import _loader  # noqa: E402
+
+
+def rate(loader, passes: int) -> float:
+    """Frames per second over ``passes`` whole passes, after one warm-up pass."""
+    for _ in loader:
+        pass
+    n, t0 = 0, time.perf_counter()
+    for _ in range(passes):
+        for batch in loader:
+            n += batch.num_graphs
+    return n / (time.perf_counter() - t0)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("store")
+    ap.add_argument("--frames", type=int, default=240, help="training frames drawn (seeded) for the pass")
+    ap.add_argument("--workers", default="0,2", help="DataLoader worker counts to measure, comma-separated")
+    ap.add_argument("--batch", type=int, default=8)
+    ap.add_argument("--passes", type=int, default=2)
+    args = ap.parse_args()
+    ds = FrameDataset(args.store, "train", max_frames=args.frames)
+    t0 = time.perf_counter()
+    memory = [ds[k] for k in range(len(ds))]
+    build = len(memory) / (time.perf_counter() - t0)
+    vertices = sum(d.num_nodes for d in memory) / len(memory)
+    print(f"{args.store}: {len(ds)} training frames, {vertices:.0f} garment vertices on average; "
+          f"batch {args.batch}; {args.passes} timed passes after a warm-up")
+    print(f"one frame read and derived in this process: {build:.1f} frames/s")
+    for w in (int(x) for x in args.workers.split(",")):
+        config = TrainConfig(batch_size=args.batch, workers=w)
+        from_store = rate(_loader(ds, config, shuffle=True, accelerator="cpu"), args.passes)
+        in_memory = rate(_loader(memory, config, shuffle=True, accelerator="cpu"), args.passes)
+        print(f"workers {w}: from the store {from_store:8.1f} frames/s | in memory {in_memory:8.1f} frames/s | "
+              f"ratio {from_store / in_memory:.2f}")
+
+
+if __name__ == "__main__":
+    main()
