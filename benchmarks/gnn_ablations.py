@@ -48,7 +48,8 @@ def run_figures(run: Path) -> dict:
 def table(figures: dict[str, dict]) -> str:
     lines = ["validation error of the detailed prediction (mm), and the test split where evaluated",
              f"{'run':<22}{'epochs':>7}{'best':>8}{'at':>5}{'final':>8}{'frames/s':>10}"
-             f"{'test coarse':>12}{'test detail':>12}{'unseen g+p':>11}{'inside %':>9}"]
+             f"{'test coarse':>12}{'test detail':>12}{'unseen g+p':>11}{'inside %':>9}{'target→detail':>14}"
+             f"{'on target':>10}"]
     for name, f in figures.items():
         t = f.get("test") or {}
         unseen = (t.get("by_seen") or {}).get("unseen garments and poses", {}).get("detail")
@@ -57,7 +58,11 @@ def table(figures: dict[str, dict]) -> str:
                  f"{f['samples_per_s']:>10.1f}" if f["samples_per_s"] else f"{'-':>10}",
                  f"{t['all']['coarse']:>12.2f}{t['all']['detail']:>12.2f}" if t else f"{'-':>24}",
                  f"{unseen:>11.2f}" if unseen is not None else f"{'-':>11}",
-                 f"{100 * t['inside_body_share']:>9.2f}" if t.get("inside_body_share") is not None else f"{'-':>9}"]
+                 f"{100 * t['inside_body_share']:>9.2f}" if t.get("inside_body_share") is not None else f"{'-':>9}",
+                 # the detail step alone (on the coarse target, as trained), where the evaluation has it
+                 f"{t['all']['truth_coarse_to_detail']:>14.2f}" if "truth_coarse_to_detail" in t.get("all", {})
+                 else f"{'-':>14}",
+                 f"{t['all']['truth_detail']:>10.2f}" if "truth_detail" in t.get("all", {}) else f"{'-':>10}"]
         lines.append("".join(cells))
     return "\n".join(lines)
 
