@@ -68,7 +68,7 @@ if [ "$PHASE" = more ]; then
   rm -rf "$RUNS/full-s0-10min" && cp -r "$RUNS/full-s0" "$RUNS/full-s0-10min"
   CUDA_VISIBLE_DEVICES=1 python -m datagen.cli evaluate "$RUNS/full-s0-10min" --data "$STORE" --split test \
     --json "$RUNS/full-s0-10min/eval_test.json" --device "$DEVICE" > "$OUT/eval_full-s0-10min.log" 2>&1 &
-  DEADLINE=$((T0 + BUDGET - ${EVAL_SECONDS:-170})) train_all --resume "$before"  # then the evaluations
+  DEADLINE=$((T0 + BUDGET - ${EVAL_SECONDS:-240})) train_all --resume "$before"  # then the evaluations
   for r in $RUNLIST; do
     IFS=: read -r name ablation seed gpu <<< "$r"
     CUDA_VISIBLE_DEVICES=$gpu python -m datagen.cli evaluate "$RUNS/$name" --data "$STORE" --split test \
