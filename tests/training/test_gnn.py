@@ -295,3 +295,46 @@ def test_the_magnitude_head_learns_small_targets():
     mean_square = target.pow(2).mean().item()
     print(f"\ntargets' mean square {mean_square:.4f}; loss {losses[0]:.4f} -> {losses[-1]:.4f}")
     assert losses[-1] < 0.7 * mean_square
+
+
+def _grid_batch(*sizes):
+    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+    from bench_gnn import grid_frame
+    from torch_geometric.data import Batch
+
+    return Batch.from_data_list([grid_frame(n, seed=k) for k, n in enumerate(sizes)])
+
+
+def test_static_shapes_give_the_same_prediction():
+    """The static pooling (padded to the input's sizes, dropped edges sent to a sink) and appended
+    self-loops: bitwise the dynamic path's prediction on the CPU, for every ablation."""
+    from training.gnn.module import GNNModule
+
+    torch.manual_seed(0)
+    b = _grid_batch(300, 200)
+    for ablation in ABLATIONS:
+        m = GNNModule({**TrainConfig(ablation=ablation).as_dict()}, 85).eval()
+        with torch.no_grad():
+            dynamic = m.predict_frames(b)
+            m.model.set_static_shapes(True)
+            static = m.predict_frames(b)
+        assert all(torch.equal(a, s) for a, s in zip(dynamic, static, strict=True)), ablation
+
+
+@pytest.mark.skipif(not torch.cuda.is_available(), reason="needs a CUDA device: the prediction is captured as a "
+                    "CUDA graph only there")
+def test_a_captured_prediction_replays_what_eager_gives():
+    from training.gnn.module import GNNModule
+
+    torch.manual_seed(0)
+    m = GNNModule(TrainConfig().as_dict(), 85).cuda().eval()
+    first, second = _grid_batch(900).cuda(), _grid_batch(900).cuda()
+    second.x_coarse += 0.1 * torch.randn_like(second.x_coarse)
+    second.anchor += 0.01
+    predict = m.captured_predictor(first)
+    for b in (first, second, first):
+        with torch.no_grad():
+            eager = m.predict_frames(b)
+        replay = predict(b)
+        for a, r in zip(eager, replay, strict=True):
+            torch.testing.assert_close(r, a, rtol=1e-4, atol=1e-6)

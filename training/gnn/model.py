@@ -41,6 +41,16 @@ def _kaiming(layer: nn.Linear) -> nn.Linear:
     return layer
 
 
+def graph_loops(edge_index: torch.Tensor, num_nodes: int, static: bool) -> torch.Tensor:
+    """The graph with one self-loop per node: :func:`with_self_loops`, or with ``static`` (a graph
+    that has none, as a mesh's edges and a static pooling's output have) the loops appended, with
+    no size that depends on the data."""
+    if not static:
+        return with_self_loops(edge_index, num_nodes)
+    loop = torch.arange(num_nodes, device=edge_index.device)
+    return torch.cat([edge_index, torch.stack([loop, loop])], dim=1)
+
+
 def with_self_loops(edge_index: torch.Tensor, num_nodes: int) -> torch.Tensor:
     """``edge_index`` with its self-loops replaced by one per node, as ``GATConv`` makes it for
     itself by default: done once per graph and level instead of in every block (each time a mask,
@@ -111,7 +121,7 @@ class _Branch(nn.Module):
             x = self.act(block(x, e_loops))
             if self.pool_after is not None and k == self.pool_after:
                 x, e, batch, info = self.pool(x, e, batch)
-                e_loops = with_self_loops(e, x.size(0))
+                e_loops = graph_loops(e, x.size(0), self.pool.static)
         if info is not None:
             x, e, batch = self.pool.unpool(x, info)
         return self.head(x)
@@ -168,8 +178,10 @@ class CoarseNet(nn.Module):
         self.first = GATBlock(in_channels, 256)
         self.out = _Output(256, [512, 512, 256], [256, 128], mode=_mode(ablation))
 
+    static = False
+
     def forward(self, x, edge_index, batch) -> torch.Tensor:
-        loops = with_self_loops(edge_index, x.size(0))
+        loops = graph_loops(edge_index, x.size(0), self.static)
         return self.out(torch.tanh(self.first(x, loops)), edge_index, batch, loops)
 
 
@@ -200,9 +212,11 @@ class DetailNet(nn.Module):
         self.out = _Output(branch_in, widths, [int(round(128 * branch_scale)), int(round(64 * branch_scale))],
                            mode=_mode(ablation), pool_after=pool)
 
+    static = False
+
     def forward(self, x, edge_index, batch, attributes) -> torch.Tensor:
         per_node = attributes[batch]
-        loops = with_self_loops(edge_index, x.size(0))
+        loops = graph_loops(edge_index, x.size(0), self.static)
         if self.parser is None:
             h = torch.tanh(self.first(torch.cat([x, per_node], dim=-1), loops))
         else:
@@ -239,6 +253,18 @@ class DetailAwareGNN(nn.Module):
             self.coarse = CoarseNet(coarse_features, ablation if ablation in ("no_decomposition", "output_limit")
                                     else "full")
             self.detail = DetailNet(detail_features, attribute_features, ablation)
+
+    def set_static_shapes(self, static: bool = True) -> DetailAwareGNN:
+        """Switch every pooling to its static form (:class:`~training.gnn.pooling.FastEdgePooling`)
+        and the graphs' self-loops to appending: the same outputs, with no tensor whose size depends
+        on the data, so inference can be captured as a CUDA graph. The input graph must have no
+        self-loops (a mesh's edges have none)."""
+        from training.gnn.pooling import FastEdgePooling
+
+        for m in self.modules():
+            if isinstance(m, (FastEdgePooling, CoarseNet, DetailNet)):
+                m.static = static
+        return self
 
     def forward_coarse(self, x, edge_index, batch) -> torch.Tensor:
         return self.coarse(x, edge_index, batch)

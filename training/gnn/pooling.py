@@ -68,9 +68,20 @@ def handshake_matching(edge_index: torch.Tensor, score: torch.Tensor, num_nodes:
 
 
 class FastEdgePooling(EdgePooling):
-    """torch_geometric's ``EdgePooling`` with :func:`handshake_matching` instead of its Python loop."""
+    """torch_geometric's ``EdgePooling`` with :func:`handshake_matching` instead of its Python loop.
+
+    With ``static`` set, the pooled graph has the input's sizes whatever the matching: N + 1 nodes
+    (the clusters first, in the same order, then padding; the last is a sink) and as many edges as
+    the input, those that coalescing would drop (repeats, and the contracted pairs' self-loops)
+    redirected to the sink. Every real node sees the same neighbours in the same order, so the
+    result on the real nodes is the dynamic one's, and nothing waits for the device: a forward
+    pass can be captured as one CUDA graph."""
+
+    static = False
 
     def _merge_edges(self, x, edge_index, batch, edge_score):
+        if self.static:
+            return self._merge_edges_static(x, edge_index, batch, edge_score)
         N = x.size(0)
         matched_edge = handshake_matching(edge_index, edge_score.detach(), N)
         nodes = torch.arange(N, device=x.device)
@@ -91,5 +102,35 @@ class FastEdgePooling(EdgePooling):
         new_x = new_x * new_edge_score.view(-1, 1)
         new_edge_index = coalesce(cluster[edge_index], num_nodes=size)
         new_batch = x.new_empty(size, dtype=torch.long).scatter_(0, cluster, batch)
+        return new_x, new_edge_index, new_batch, UnpoolInfo(edge_index=edge_index, cluster=cluster, batch=batch,
+                                                            new_edge_score=new_edge_score)
+
+    def _merge_edges_static(self, x, edge_index, batch, edge_score):
+        N = x.size(0)
+        sink = N
+        matched_edge = handshake_matching(edge_index, edge_score.detach(), N)
+        nodes = torch.arange(N, device=x.device)
+        partner = torch.where(matched_edge >= 0, edge_index[1][matched_edge.clamp_min(0)], nodes)
+        leader = torch.minimum(nodes, partner)
+        is_pair_leader = (matched_edge >= 0) & (nodes == leader)
+        is_single = matched_edge < 0
+        # cluster ids as the dynamic merge numbers them: pair leaders in node order, then singles
+        pairs = is_pair_leader.sum()
+        new_id = torch.where(is_pair_leader, torch.cumsum(is_pair_leader, 0) - 1,
+                             pairs + torch.cumsum(is_single, 0) - 1)
+        cluster = new_id[leader]
+        new_x = scatter(x, cluster, dim=0, dim_size=N + 1, reduce="sum")
+        # a pair's score is its contracted edge's, a single's 1; padding keeps 1
+        writes = torch.where(is_pair_leader | is_single, cluster, sink)
+        values = torch.where(is_pair_leader, edge_score[matched_edge.clamp_min(0)], torch.ones_like(edge_score[:1]))
+        new_edge_score = torch.cat([x.new_ones(N + 1).scatter(0, writes, values)[:N], x.new_ones(1)])
+        new_x = new_x * new_edge_score.view(-1, 1)
+        # coalesce's order (by source, then target); repeats and self-loops go to the sink
+        c = cluster[edge_index]
+        key, order = torch.sort(c[0] * (N + 1) + c[1])
+        src, dst = c[0][order], c[1][order]
+        drop = (src == dst) | torch.cat([key.new_zeros(1, dtype=torch.bool), key[1:] == key[:-1]])
+        new_edge_index = torch.stack([torch.where(drop, sink, src), torch.where(drop, sink, dst)])
+        new_batch = torch.zeros(N + 1, dtype=batch.dtype, device=batch.device).scatter(0, cluster, batch)
         return new_x, new_edge_index, new_batch, UnpoolInfo(edge_index=edge_index, cluster=cluster, batch=batch,
                                                             new_edge_score=new_edge_score)
