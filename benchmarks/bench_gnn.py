@@ -74,37 +74,29 @@ def main() -> None:
         if dev.type == "cuda":
             torch.cuda.synchronize()
 
+    def per_frame(call, graph, frames: int) -> tuple[float, int]:
+        """ms per frame of ``call(graph)`` over at least ``--seconds``, after 3 warm-up calls; and the calls."""
+        for _ in range(3):
+            call(graph)
+        sync()
+        n, t0 = 0, time.perf_counter()
+        while time.perf_counter() - t0 < args.seconds:
+            call(graph)
+            sync()
+            n += 1
+        return 1000 * (time.perf_counter() - t0) / n / frames, n
+
     module.eval()
     with torch.no_grad():
-        for frames, graph in ((1, one), (args.batch, batch)):  # one frame, and a batch of frames per call
-            for _ in range(3):
-                module.predict_frames(graph)
-            sync()
-            n, t0 = 0, time.perf_counter()
-            while time.perf_counter() - t0 < args.seconds:
-                module.predict_frames(graph)
-                sync()
-                n += 1
-            ms = 1000 * (time.perf_counter() - t0) / n / frames
-            print(f"inference: {ms:.1f} ms per frame (batch of {frames}, coarse + detail features + detail; {n} runs)")
-        # static shapes (the same outputs), and on a GPU the pass captured as one CUDA graph
-        module.model.set_static_shapes(True)
-        runs = [("static shapes", module.predict_frames)]
-        if dev.type == "cuda":
-            runs.append(("one CUDA graph", None))
-        for label, predict in runs:
-            for frames, graph in ((1, one), (args.batch, batch)):
-                call = predict or module.captured_predictor(graph)
-                for _ in range(3):
-                    call(graph)
-                sync()
-                n, t0 = 0, time.perf_counter()
-                while time.perf_counter() - t0 < args.seconds:
-                    call(graph)
-                    sync()
-                    n += 1
-                ms = 1000 * (time.perf_counter() - t0) / n / frames
-                print(f"inference, {label}: {ms:.1f} ms per frame (batch of {frames}; {n} runs)")
+        # as trained; with static shapes (the same outputs); and on a GPU captured as one CUDA graph
+        runs = [("", False), (", static shapes", True)] + ([(", one CUDA graph", True)] if dev.type == "cuda" else [])
+        for label, static in runs:
+            module.model.set_static_shapes(static)
+            for frames, graph in ((1, one), (args.batch, batch)):  # one frame, and a batch of frames per call
+                call = module.captured_predictor(graph) if "graph" in label else module.predict_frames
+                ms, n = per_frame(call, graph, frames)
+                print(f"inference{label}: {ms:.1f} ms per frame (batch of {frames}, coarse + detail features + "
+                      f"detail; {n} runs)")
         module.model.set_static_shapes(False)
     module.train()
     opt = torch.optim.Adam(module.parameters(), lr=1e-3)

@@ -10,6 +10,8 @@ function (``datagen.geometry.features``), so the validation error is the error a
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import pytorch_lightning as pl
 import torch
 
@@ -61,13 +63,7 @@ class GNNModule(pl.LightningModule):
         self.model.set_static_shapes(True)
         names = ("x_coarse", "edge_index", "batch", "attributes", "anchor", "face", "joints", "skin")
         buffers = {k: getattr(example, k).clone() for k in names}
-
-        class Inputs:  # what predict_frames reads, at fixed addresses
-            pass
-
-        inputs = Inputs()
-        for k, v in buffers.items():
-            setattr(inputs, k, v)
+        inputs = SimpleNamespace(**buffers)  # what predict_frames reads, at fixed addresses
         stream = torch.cuda.Stream()
         stream.wait_stream(torch.cuda.current_stream())
         with torch.no_grad(), torch.cuda.stream(stream):

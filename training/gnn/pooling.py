@@ -67,6 +67,17 @@ def handshake_matching(edge_index: torch.Tensor, score: torch.Tensor, num_nodes:
     return matched_edge
 
 
+def _pairs(edge_index: torch.Tensor, edge_score: torch.Tensor, num_nodes: int) -> tuple[torch.Tensor, ...]:
+    """The handshake matching and what both merges build on it: each node's matched edge (-1: none),
+    its pair's leader (a pair is named by its lower node; a single is its own), and the masks of
+    pair leaders and of single nodes."""
+    matched_edge = handshake_matching(edge_index, edge_score.detach(), num_nodes)
+    nodes = torch.arange(num_nodes, device=edge_index.device)
+    partner = torch.where(matched_edge >= 0, edge_index[1][matched_edge.clamp_min(0)], nodes)
+    leader = torch.minimum(nodes, partner)
+    return matched_edge, leader, (matched_edge >= 0) & (nodes == leader), matched_edge < 0
+
+
 class FastEdgePooling(EdgePooling):
     """torch_geometric's ``EdgePooling`` with :func:`handshake_matching` instead of its Python loop.
 
@@ -83,12 +94,7 @@ class FastEdgePooling(EdgePooling):
         if self.static:
             return self._merge_edges_static(x, edge_index, batch, edge_score)
         N = x.size(0)
-        matched_edge = handshake_matching(edge_index, edge_score.detach(), N)
-        nodes = torch.arange(N, device=x.device)
-        partner = torch.where(matched_edge >= 0, edge_index[1][matched_edge.clamp_min(0)], nodes)
-        leader = torch.minimum(nodes, partner)  # a pair is named by its lower node
-        is_pair_leader = (matched_edge >= 0) & (nodes == leader)
-        is_single = matched_edge < 0
+        matched_edge, leader, is_pair_leader, is_single = _pairs(edge_index, edge_score, N)
         pair_leaders = torch.nonzero(is_pair_leader).flatten()
         singles = torch.nonzero(is_single).flatten()
         P = pair_leaders.numel()
@@ -108,12 +114,7 @@ class FastEdgePooling(EdgePooling):
     def _merge_edges_static(self, x, edge_index, batch, edge_score):
         N = x.size(0)
         sink = N
-        matched_edge = handshake_matching(edge_index, edge_score.detach(), N)
-        nodes = torch.arange(N, device=x.device)
-        partner = torch.where(matched_edge >= 0, edge_index[1][matched_edge.clamp_min(0)], nodes)
-        leader = torch.minimum(nodes, partner)
-        is_pair_leader = (matched_edge >= 0) & (nodes == leader)
-        is_single = matched_edge < 0
+        matched_edge, leader, is_pair_leader, is_single = _pairs(edge_index, edge_score, N)
         # cluster ids as the dynamic merge numbers them: pair leaders in node order, then singles
         pairs = is_pair_leader.sum()
         new_id = torch.where(is_pair_leader, torch.cumsum(is_pair_leader, 0) - 1,
