@@ -18,6 +18,9 @@ mkdir -p "$OUT" "$RUNS"
 # eight trainings and evaluations share 64 cores: without a limit each takes a thread per core
 # (on 2026-11-27 eight evaluations of 960 frames did not end in 290 s)
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-6}
+# GPU utilisation every 5 s while the command runs (issue 24: is the loader the limit?)
+nvidia-smi --query-gpu=timestamp,index,utilization.gpu,memory.used --format=csv,noheader -l 5 \
+  >> "$OUT/gpu_util_$PHASE.csv" 2>/dev/null & SMI=$!
 filter() { grep -v "^Module\|^Warp\|^   \|CUDA Toolkit\|Devices:\|Kernel cache"; }
 # name ablation seed gpu
 RUNLIST=${RUNLIST:-"full-s0:full:0:0 no_decomposition:no_decomposition:0:0 full-s1:full:1:1 output_limit:output_limit:0:1
@@ -52,6 +55,13 @@ if [ "$PHASE" = gen ]; then
     CUDA_VISIBLE_DEVICES=2 timeout 400 python benchmarks/bench_sim.py run-scenes --inputs .simbench/runs.pkl --device cuda \
       --out-dir "$OUT/six" 2>&1 | filter > "$OUT/six_runs.txt" &
   fi
+  # GPU 1 is free until the runs start: the captured prediction's test, then the inference benchmark
+  if [ "$DEVICE" = cuda ]; then
+    ( CUDA_VISIBLE_DEVICES=1 timeout 150 python -m pytest -q -p no:cacheprovider tests/training/test_gnn.py -k "captured or static" \
+        > "$OUT/captured_test.txt" 2>&1
+      CUDA_VISIBLE_DEVICES=1 timeout 200 python benchmarks/bench_gnn.py --vertices 3500 --batch 60 --device cuda \
+        > "$OUT/bench_gnn_b60.txt" 2>&1 ) &
+  fi
   ( time CUDA_VISIBLE_DEVICES=0 python -m datagen.cli generate $GEN_ARGS --out "$STORE" --device "$DEVICE" ) \
     > "$OUT/generate.log" 2>&1
   filter < "$OUT/generate.log" | tail -n 14
@@ -69,15 +79,20 @@ if [ "$PHASE" = more ]; then
   CUDA_VISIBLE_DEVICES=1 python -m datagen.cli evaluate "$RUNS/full-s0-10min" --data "$STORE" --split test \
     --json "$RUNS/full-s0-10min/eval_test.json" --device "$DEVICE" > "$OUT/eval_full-s0-10min.log" 2>&1 &
   DEADLINE=$((T0 + BUDGET - ${EVAL_SECONDS:-240})) train_all --resume "$before"  # then the evaluations
+  # the two full runs on every test frame, the ablations on a third of them (drawn evenly), all
+  # ended in time for the logs and Figure 10 to be written inside the command's limit
+  left=$((T0 + BUDGET - 45 - $(date +%s)))
   for r in $RUNLIST; do
     IFS=: read -r name ablation seed gpu <<< "$r"
-    CUDA_VISIBLE_DEVICES=$gpu python -m datagen.cli evaluate "$RUNS/$name" --data "$STORE" --split test \
-      --json "$RUNS/$name/eval_test.json" --device "$DEVICE" > "$OUT/eval_$name.log" 2>&1 &
+    frames=""; [ "$ablation" = full ] || frames="--max-frames ${ABLATION_FRAMES:-860}"
+    CUDA_VISIBLE_DEVICES=$gpu timeout "$left" python -m datagen.cli evaluate "$RUNS/$name" --data "$STORE" --split test \
+      --json "$RUNS/$name/eval_test.json" --device "$DEVICE" $frames > "$OUT/eval_$name.log" 2>&1 &
   done
   wait
-  for r in $RUNLIST; do IFS=: read -r name _ <<< "$r"; cp -r "$RUNS/$name/logs" "$OUT/logs_$name"; cp "$RUNS/$name"/*.json "$OUT/logs_$name/"; done
+  for r in $RUNLIST; do IFS=: read -r name _ <<< "$r"; rm -rf "$OUT/logs_$name"; cp -r "$RUNS/$name/logs" "$OUT/logs_$name"; cp "$RUNS/$name"/*.json "$OUT/logs_$name/"; done
   cp "$RUNS/full-s0-10min/eval_test.json" "$OUT/eval_full-s0-10min.json" 2>/dev/null
   python benchmarks/gnn_ablations.py $(for r in $RUNLIST; do echo "${r%%:*}=$RUNS/${r%%:*}"; done) \
     "full-s0 at 10 min=$RUNS/full-s0-10min" --out "$OUT" 2>&1 | tail -14
   filter < "$OUT/eval_full-s0.log" | tail -40
 fi
+kill $SMI 2>/dev/null
