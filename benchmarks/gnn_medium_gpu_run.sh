@@ -20,7 +20,7 @@ mkdir -p "$OUT" "$RUNS"
 export OMP_NUM_THREADS=${OMP_NUM_THREADS:-6}
 # GPU utilisation every 5 s while the command runs (issue 24: is the loader the limit?)
 nvidia-smi --query-gpu=timestamp,index,utilization.gpu,memory.used --format=csv,noheader -l 5 \
-  >> "$OUT/gpu_util_$PHASE.csv" 2>/dev/null & SMI=$!
+  >> "$OUT/gpu_util_$PHASE.csv" 2>/dev/null & SMI=$!; disown $SMI  # not among what `wait` waits for
 filter() { grep -v "^Module\|^Warp\|^   \|CUDA Toolkit\|Devices:\|Kernel cache"; }
 # name ablation seed gpu
 RUNLIST=${RUNLIST:-"full-s0:full:0:0 no_decomposition:no_decomposition:0:0 full-s1:full:1:1 output_limit:output_limit:0:1
