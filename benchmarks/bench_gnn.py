@@ -89,11 +89,15 @@ def main() -> None:
     module.eval()
     with torch.no_grad():
         # as trained; with static shapes (the same outputs); and on a GPU captured as one CUDA graph
-        runs = [("", False), (", static shapes", True)] + ([(", one CUDA graph", True)] if dev.type == "cuda" else [])
+        # (the graph with each step's two branches on one stream, then side by side on two)
+        runs = [("", False), (", static shapes", True)]
+        if dev.type == "cuda":
+            runs += [(", one CUDA graph, one stream", True), (", one CUDA graph, two streams", True)]
         for label, static in runs:
             module.model.set_static_shapes(static)
             for frames, graph in ((1, one), (args.batch, batch)):  # one frame, and a batch of frames per call
-                call = module.captured_predictor(graph) if "graph" in label else module.predict_frames
+                call = (module.captured_predictor(graph, parallel_branches="two" in label) if "graph" in label
+                        else module.predict_frames)
                 ms, n = per_frame(call, graph, frames)
                 print(f"inference{label}: {ms:.1f} ms per frame (batch of {frames}, coarse + detail features + "
                       f"detail; {n} runs)")

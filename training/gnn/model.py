@@ -144,6 +144,12 @@ class _Output(nn.Module):
     docs/training.md) and in a probe from the first steps (tests/training/test_gnn.py). Softplus is
     positive, as a magnitude must be, and never without gradient."""
 
+    side_stream = None
+    """A CUDA stream for the direction branch, set while a prediction is captured as a CUDA graph
+    (:meth:`DetailAwareGNN.set_side_stream`): the two branches are independent, so the graph runs
+    them side by side. A single frame's kernels are too small to fill the GPU, and one after
+    another their launches, not their arithmetic, take the time."""
+
     def __init__(self, in_channels: int, widths: list[int], head: list[int], *, mode: str,
                  pool_after: int | None = None):
         super().__init__()
@@ -158,6 +164,14 @@ class _Output(nn.Module):
                                   last, pool_after=pool_after)
 
     def forward(self, x, edge_index, batch, loops) -> torch.Tensor:
+        if self.mode == "decomposed" and self.side_stream is not None:
+            main = torch.cuda.current_stream()
+            self.side_stream.wait_stream(main)
+            with torch.cuda.stream(self.side_stream):
+                d = nn.functional.normalize(self.direction(x, edge_index, batch, loops), dim=-1)
+            m = self.magnitude(x, edge_index, batch, loops)
+            main.wait_stream(self.side_stream)
+            return m * d
         if self.mode == "decomposed":
             m = self.magnitude(x, edge_index, batch, loops)
             d = nn.functional.normalize(self.direction(x, edge_index, batch, loops), dim=-1)
@@ -264,6 +278,16 @@ class DetailAwareGNN(nn.Module):
         for m in self.modules():
             if isinstance(m, (FastEdgePooling, CoarseNet, DetailNet)):
                 m.static = static
+        return self
+
+    def set_side_stream(self, stream) -> DetailAwareGNN:
+        """Run each step's direction branch on ``stream`` (a ``torch.cuda.Stream``; None: on the
+        current stream), beside its magnitude branch. Meant for capturing a CUDA graph
+        (:meth:`~training.gnn.module.GNNModule.captured_predictor`), where the graph keeps the
+        two streams' order and memory; eagerly, tensors would cross streams unguarded."""
+        for m in self.modules():
+            if isinstance(m, _Output):
+                m.side_stream = stream
         return self
 
     def forward_coarse(self, x, edge_index, batch) -> torch.Tensor:

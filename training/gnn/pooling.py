@@ -8,13 +8,16 @@ pass of W_detail, and dominated a training step on an H100.
 
 :class:`FastEdgePooling` keeps everything of ``EdgePooling`` (the scoring layer and its parameters,
 the merged features ``(x_i + x_j) * score``, coarsened edges, ``unpool``) and replaces only the
-choice of the matching by a parallel handshake: each unmatched node proposes its best-scoring
-edge (an undirected edge scores the larger of its two directions) to an unmatched neighbour, and
-two nodes that propose each other are contracted; a few rounds over what is left give a
-maximal-or-nearly matching (about half the nodes, as the paper's "N_g
-roughly becomes half"). Greedy and handshake matchings agree on every edge that is the best of
-both its ends, so the highest-scoring contractions are the same; they can differ further down.
-Ties go to the lower edge index: the result is a pure function of the scores.
+choice of the matching by parallel rounds. Each round is a handshake (each unmatched node proposes
+its best-scoring edge, an undirected edge scoring the larger of its two directions, to an unmatched
+neighbour, and two nodes that propose each other are contracted), then a red-blue step (the
+unmatched nodes coloured by a hash of node and round; each blue one proposes its best edge to a
+red one, and each red one takes its best proposal), which keeps the matching growing where scores
+rise steadily across the mesh and handshakes alone stall. A few rounds give a nearly maximal
+matching (about half the nodes, as the paper's "N_g roughly becomes half"). Greedy and these
+matchings agree on every edge that is the best of both its ends, so the highest-scoring
+contractions are the same; they can differ further down. Ties go to the lower edge index: the
+result is a pure function of graph and scores.
 """
 
 from __future__ import annotations
@@ -24,18 +27,23 @@ from torch_geometric.nn import EdgePooling
 from torch_geometric.nn.pool.edge_pool import UnpoolInfo
 from torch_geometric.utils import coalesce, scatter
 
-HANDSHAKE_ROUNDS = 16
-"""Proposal rounds; each contracts the mutual best pairs among the nodes still unmatched."""
+HANDSHAKE_ROUNDS = 4
+"""Rounds of handshake and red-blue step. On drape's garments and on a 3,500-vertex grid the
+matching stops growing after 2-3 rounds (90-96 % of the nodes matched), with random scores and
+with scores that rise steadily over the mesh; more rounds change nothing and each costs ~45 kernel
+launches per pooling. (Handshakes alone matched 8 % of the grid's nodes in 16 rounds when its
+scores rose steadily; tests/training/test_gnn.py.)"""
 
 
 def handshake_matching(edge_index: torch.Tensor, score: torch.Tensor, num_nodes: int,
-                       rounds: int = HANDSHAKE_ROUNDS) -> torch.Tensor:
+                       rounds: int | None = None) -> torch.Tensor:
     """A matching of the graph as the chosen edge of each node's pair ([N], -1 for unmatched nodes).
 
     ``edge_index`` holds each directed edge at most once (coalesced). Nothing here waits for the
     device: the rounds run in full (a round after the matching is complete changes nothing), and
     no tensor's size depends on the data, so on a GPU the host queues the work without a sync.
     """
+    rounds = HANDSHAKE_ROUNDS if rounds is None else rounds
     src, dst = edge_index
     E = src.numel()
     if E == 0:
@@ -50,20 +58,47 @@ def handshake_matching(edge_index: torch.Tensor, score: torch.Tensor, num_nodes:
     reverse = order[at]
     has_reverse = sorted_key[at] == dst * num_nodes + src
     score = torch.where(has_reverse, torch.maximum(score, score[reverse]), score)
+    # every edge's rank in descending score, ties to the lower index: a node's best free edge is then
+    # its free edge of least rank, one reduction a round (a maximum and then the lowest index among
+    # equal scores took two, and a float comparison)
+    order = torch.argsort(-score, stable=True)
+    rank = torch.empty_like(eid).scatter_(0, order, eid)
     nodes = torch.arange(num_nodes, device=src.device)
-    matched_edge = torch.full((num_nodes,), -1, dtype=torch.long, device=src.device)
-    for _ in range(rounds):
-        free = (src != dst) & (matched_edge[src] < 0) & (matched_edge[dst] < 0)
-        s = torch.where(free, score, torch.full_like(score, -torch.inf))
-        best = torch.full((num_nodes,), -torch.inf, dtype=score.dtype, device=src.device)
-        best = best.scatter_reduce(0, src, s, reduce="amax")
-        is_best = free & (s == best[src])
-        pick = torch.full((num_nodes,), E, dtype=torch.long, device=src.device)
-        pick = pick.scatter_reduce(0, src, torch.where(is_best, eid, E), reduce="amin")  # lowest index among ties
-        has = pick < E
-        proposal = torch.where(has, dst[pick.clamp_max(E - 1)], -1)
-        mutual = has & (proposal[proposal.clamp_min(0)] == nodes)
-        matched_edge = torch.where(mutual, pick, matched_edge)
+    not_loop = src != dst
+    none = torch.full((num_nodes,), E, dtype=torch.long, device=src.device)
+    matched_edge = torch.full((num_nodes + 1,), -1, dtype=torch.long, device=src.device)  # the last: a sink
+    free_node = torch.ones(num_nodes, dtype=torch.bool, device=src.device)
+    # each round's colouring of the nodes for the red-blue step: a hash of node and round, so the
+    # matching stays a pure function of graph and scores
+    blue = ((nodes[None] * 2654435761 + torch.arange(rounds, device=src.device)[:, None] * 40503 + 12345)
+            >> 16) & 1 == 1
+    for r in range(rounds):
+        # handshake: two free nodes whose best free edges are each other's
+        free = not_loop & free_node[src] & free_node[dst]
+        best = none.scatter_reduce(0, src, torch.where(free, rank, E), reduce="amin")
+        has = best < E
+        pick = order[best.clamp_max(E - 1)]
+        proposal = torch.where(has, dst[pick], nodes)
+        mutual = has & has[proposal] & (proposal[proposal] == nodes)
+        matched_edge = torch.where(torch.cat([mutual, mutual[:1] & False]), torch.cat([pick, pick[:1]]),
+                                   matched_edge)
+        free_node = free_node & ~mutual
+        # red-blue: each free blue node proposes its best free edge to a red node, and each red node
+        # takes the best proposal it gets. Where scores rise steadily across the garment, every
+        # node's best edge points the same way and a handshake contracts only the chains' ends (8 %
+        # of a grid's nodes after 16 rounds); this step matches a share of what is left whatever
+        # the scores, and the handshake before it keeps the mutual best pairs first.
+        free = not_loop & has_reverse & free_node[src] & free_node[dst] & blue[r][src] & ~blue[r][dst]
+        best = none.scatter_reduce(0, src, torch.where(free, rank, E), reduce="amin")
+        proposed = free & (rank == best[src])
+        taken = none.scatter_reduce(0, dst, torch.where(proposed, rank, E), reduce="amin")  # at the red nodes
+        accepted = taken < E
+        edge = order[taken.clamp_max(E - 1)]  # blue -> red
+        red_edge = torch.where(accepted, reverse[edge], matched_edge[:-1])
+        blue_node = torch.where(accepted, src[edge], num_nodes)
+        matched_edge = torch.cat([red_edge, matched_edge[-1:]]).scatter(0, blue_node, edge)
+        free_node = free_node & (matched_edge[:-1] < 0)
+    matched_edge = matched_edge[:-1]
     return matched_edge
 
 
