@@ -50,7 +50,7 @@ class GNNModule(pl.LightningModule):
         dd = self.model.forward_detail(x, batch.edge_index, batch.batch, batch.attributes)
         return coarse, coarse + dd.float() / self.scale
 
-    def captured_predictor(self, example, warmup: int = 3, parallel_branches: bool = True):
+    def captured_predictor(self, example, warmup: int = 3, parallel_branches: bool = False):
         """:meth:`predict_frames` for batches shaped like ``example`` (same garments, same batch
         size; on a CUDA device), captured once as a CUDA graph and replayed: the returned function
         copies a batch's inputs into the graph's buffers, replays it and returns (coarse, detail),
@@ -58,7 +58,8 @@ class GNNModule(pl.LightningModule):
         (:meth:`DetailAwareGNN.set_static_shapes`: the same outputs). A single frame's forward pass
         is ~1,400 launches, most of its time on the host; a replay is one. With
         ``parallel_branches`` each step's magnitude and direction branches are captured on two
-        streams, so the graph runs them side by side (:meth:`DetailAwareGNN.set_side_stream`)."""
+        streams, so the graph runs them side by side (:meth:`DetailAwareGNN.set_side_stream`); off
+        by default until it has run on a GPU (its test and ``benchmarks/bench_gnn.py`` cover both)."""
         if example.x_coarse.device.type != "cuda":
             raise ValueError("a CUDA graph needs the batch on a CUDA device")
         self.eval()
