@@ -19,6 +19,8 @@ def register(sub, formatter) -> None:
                        epilog="examples:\n  drape generate --out tiny.zarr                 (the tiny preset)\n"
                        "  drape generate my.toml --out my.zarr --device cuda\n"
                        "  drape generate --preset paper-gnn --out gnn.zarr --executor ray --device cuda\n"
+                       "  drape generate --preset medium --out medium.zarr --device cuda:0,cuda:1,cuda:2,cuda:3   "
+                       "(four GPUs of this host)\n"
                        "  drape generate --preset paper-motion --out motion.zarr --device cuda --time-limit 50   "
                        "(again until it exits 0)\n"
                        "  drape generate --preset paper-motion --out motion.zarr --device cuda --batch-size 252   "
@@ -31,7 +33,8 @@ def register(sub, formatter) -> None:
                    help="local: processes that build garments, compute targets and stage while the simulator runs "
                         "(default: cores - 1, at most 8; 0: none); ray: CPUs of the local Ray cluster (default: every core; "
                         "one task per GPU with --device cuda, else one per CPU)")
-    p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N)")
+    p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N); local executor: several as a "
+                   "comma list (cuda:0,cuda:1,...), one simulating process per device, each a share of the scenes")
     p.add_argument("--time-limit", type=float, default=None, metavar="MINUTES",
                    help="local executor: start no batch that would not end within this many minutes (judged by the "
                         "last batch); what is simulated stays staged, the same command continues it, and the exit "
@@ -115,8 +118,10 @@ def _cmd_generate(args) -> int:
             started[key] = (t0, last, done)
             return
         bar = bars.get(key)
-        # a new batch restarts the frame bar (Ray's tasks run side by side: the bar follows the furthest)
-        if bar is None or bar.total != total or (kind == 0 and done < bar.n and args.executor == "local"):
+        # a new batch restarts the frame bar (Ray's tasks, or several devices, run side by side: the bar
+        # follows the furthest)
+        side_by_side = args.executor == "ray" or "," in str(args.device)
+        if bar is None or bar.total != total or (kind == 0 and done < bar.n and not side_by_side):
             if bar is not None:
                 bar.close()
             bar = bars[key] = tqdm(total=total, desc=desc, unit=unit, file=sys.stdout, mininterval=1.0,
@@ -158,11 +163,15 @@ def _cmd_generate(args) -> int:
             print(f"the simulator ran {summary['simulate_seconds']:.0f} s in {summary['batches']} batch(es) and every "
                   "scene failed, so no garment-frame was stored (drape info lists why)")
         for t in summary.get("tasks", []):
-            where = (f"GPU {t['gpus']} (CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']})" if t["gpus"]
-                     else f"CPU (pid {t['pid']})")
+            if "device" in t:  # the local executor on several devices
+                where = f"{t['device']} (pid {t['pid']})"
+            else:
+                where = (f"GPU {t['gpus']} (CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']})" if t["gpus"]
+                         else f"CPU (pid {t['pid']})")
             rate = f", {t['garment_frames'] / t['simulate_seconds']:.2f} garment-frames/s in the simulator" \
                 if t["simulate_seconds"] else ""
-            print(f"  ray task {t['task']} on {t['host']} {where}: {t['samples']} scenes in {t['seconds']:.0f} s"
+            kind = "process" if "device" in t else "ray task"
+            print(f"  {kind} {t['task']} on {t['host']} {where}: {t['samples']} scenes in {t['seconds']:.0f} s"
                   f"{rate}")
     problems = validate(args.out)
     if problems:

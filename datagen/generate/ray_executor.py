@@ -21,12 +21,14 @@ otherwise a local one is started with ``workers`` CPUs and the GPUs Ray finds.
 
 from __future__ import annotations
 
-import math
 import os
 import time
 from pathlib import Path
 
 from datagen.errors import InputError
+from datagen.generate.devices import shares, stage_share
+
+__all__ = ["RayCluster", "import_ray", "shares", "uses_gpu"]
 
 
 def import_ray():
@@ -42,28 +44,8 @@ def uses_gpu(device: str | None) -> bool:
     return bool(device) and str(device).startswith("cuda")
 
 
-def shares(indices: list[int], batch_size: int, slots: int) -> list[list[int]]:
-    """Cut ``indices`` into contiguous shares, as even as possible: at least ``slots`` of them (one
-    per GPU or CPU, when there are that many scenes) and none longer than ``batch_size``."""
-    if not indices:
-        return []
-    n = max(min(slots, len(indices)), math.ceil(len(indices) / batch_size))
-    base, extra = divmod(len(indices), n)
-    out, start = [], 0
-    for k in range(n):
-        size = base + (1 if k < extra else 0)
-        out.append(list(indices[start:start + size]))
-        start += size
-    return out
-
-
 def _task(config_dict: dict, out: str, indices: list[int], device: str | None, workers: int, task: int,
           queue) -> dict:
-    from datagen.config import load_config
-    from datagen.generate.config import DatasetConfig
-    from datagen.generate.plan import Plan, open_writer
-    from datagen.generate.samples import simulate_samples
-
     t0 = time.perf_counter()
     visible = os.environ.get("CUDA_VISIBLE_DEVICES")
     gpus = []
@@ -72,23 +54,15 @@ def _task(config_dict: dict, out: str, indices: list[int], device: str | None, w
 
         gpus = [int(g) if str(g).isdigit() else str(g) for g in ray.get_gpu_ids()]
         device = "cuda:0"  # Ray made this task's GPU the only visible one
-    plan = Plan(load_config(DatasetConfig, config_dict))
-    writer = open_writer(plan, out)
-    todo = writer.missing(indices)
 
     def progress(_kind, done, total, scenes):
         if queue is not None and (done % 20 == 0 or done == total):
             queue.put_nowait((task, done, total, scenes))
 
-    stats: dict = {}
-    if todo:
-        if workers > 0:
-            stats = simulate_samples(plan, todo, device, progress=progress, out=out, workers=workers)
-        else:
-            stats = simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s),
-                                     progress=progress)
+    result = stage_share(config_dict, out, indices, device, workers, progress=progress)
+    stats = result["stats"]
     return {"task": task, "gpus": gpus, "cuda_visible_devices": visible, "pid": os.getpid(),
-            "host": os.uname().nodename, "samples": len(todo), "seconds": time.perf_counter() - t0,
+            "host": os.uname().nodename, "samples": result["samples"], "seconds": time.perf_counter() - t0,
             "simulate_seconds": stats.get("simulate_seconds", 0.0), "garment_frames": stats.get("garment_frames", 0)}
 
 

@@ -26,6 +26,7 @@ from pathlib import Path
 
 from datagen.errors import InputError
 from datagen.generate.config import DatasetConfig, parse_garment
+from datagen.generate.devices import parse_devices, run_on_devices
 from datagen.generate.plan import Plan, open_writer, static_groups
 from datagen.generate.samples import default_workers, simulate_samples
 
@@ -40,7 +41,9 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
 
     Args:
         executor: ``local`` (this process simulates; ``workers`` processes build garments, compute
-            targets and stage alongside) or ``ray`` (one Ray task per GPU, or per CPU on the CPU, each
+            targets and stage alongside; with several devices, ``cuda:0,cuda:1``, one simulating
+            process per device, each with its share of the workers: :mod:`datagen.generate.devices`)
+            or ``ray`` (one Ray task per GPU, or per CPU on the CPU, each
             simulating a share: :mod:`datagen.generate.ray_executor`).
         workers: local: processes beside the simulating one (default
             :func:`~datagen.generate.samples.default_workers`; 0: everything in this process); ray: the
@@ -112,22 +115,29 @@ def preflight(plan, out: str | Path, *, executor: str, device: str | None, worke
     if executor == "local":
         from datagen.sim.scene import warp_device
 
-        warp_device(device)
+        for d in parse_devices(device):
+            warp_device(d)
+    elif device is not None and "," in str(device):
+        raise InputError(f"--device {device}: a list of devices is for the local executor; the ray executor gives "
+                         "each task a GPU of its own: give --device cuda")
     for m, entry in enumerate(plan.motions):  # motion files: long enough at the config's frame rate
         if entry.startswith("file:"):
             plan.motion(m)
     c = plan.config
-    batch = min(c.simulation.batch_size, plan.sample_count)
+    procs = len(parse_devices(device)) if executor == "local" else 1  # simulating processes on this host
+    batch = min(c.simulation.batch_size, -(-plan.sample_count // procs))
     frames = simulated_frames(plan)
     body_vertices = int(plan.body_model.v_template.shape[0])
-    need = batch * frames * body_vertices * BODY_BYTES_PER_VERTEX_FRAME
+    need = procs * batch * frames * body_vertices * BODY_BYTES_PER_VERTEX_FRAME
     from datagen.sim.scene import available_ram
 
     free = available_ram()
     if executor == "local" and free is not None and need > free:
-        raise InputError(f"a batch of {batch} scenes of {frames} simulated frames needs about {need / 2**30:,.1f} GiB "
+        each = f"{procs} simulating processes, each with a batch" if procs > 1 else "a batch"
+        raise InputError(f"{each} of {batch} scenes of {frames} simulated frames needs about {need / 2**30:,.1f} GiB "
                          f"of memory for the posed bodies alone, and this machine has {free / 2**30:,.1f} GiB "
-                         "available; lower frames or simulation.batch_size in the config")
+                         "available; lower frames or simulation.batch_size in the config"
+                         + (", or name fewer devices" if procs > 1 else ""))
     edge_scale = 1.0
     if c.garment_edge_length is not None:
         from datagen.garment.types import GARMENT_TYPES
@@ -158,7 +168,11 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
     todo = writer.missing(range(plan.sample_count))
     log.info("%d of %d samples to simulate", len(todo), plan.sample_count)
     stats = {}
-    if executor == "local":
+    devices = parse_devices(device)
+    if executor == "local" and len(devices) > 1 and todo:
+        stats = run_on_devices(config, out, todo, devices, workers=workers, progress=progress,
+                               seconds_left=None if deadline is None else deadline - time.perf_counter())
+    elif executor == "local":
         workers = default_workers() if workers is None else workers
         if workers > 0 and todo:
             stats = simulate_samples(plan, todo, device, progress=progress, out=out, workers=workers,
@@ -184,5 +198,6 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
     if stats.get("simulate_seconds"):
         summary |= stats
         summary["garment_frames_per_second"] = stats["garment_frames"] / seconds
-        summary["simulator_garment_frames_per_second"] = stats["garment_frames"] / stats["simulate_seconds"]
+        if "tasks" not in stats:  # several devices: their rates added (run_on_devices)
+            summary["simulator_garment_frames_per_second"] = stats["garment_frames"] / stats["simulate_seconds"]
     return summary

@@ -266,6 +266,21 @@ def test_ray_executor_makes_the_same_store(local_store, tmp_path):
     assert_same_store(local_store, out)
 
 
+def test_several_devices_make_the_same_store(local_store, tmp_path):
+    """The local executor on two devices (``--device cpu,cpu``): two simulating processes, each a
+    share of the five scenes, staging side by side; then one pack."""
+    out = tmp_path / "two.zarr"
+    seen = []
+    summary = generate(micro(), out, device="cpu,cpu", workers=0, progress=lambda *a: seen.append(a))
+    assert summary["simulated"] == 5 and summary["complete"]
+    assert sorted(t["samples"] for t in summary["tasks"]) == [2, 3]
+    assert len({t["pid"] for t in summary["tasks"]}) == 2 and {t["device"] for t in summary["tasks"]} == {"cpu"}
+    assert summary["garment_frames"] == sum(t["garment_frames"] for t in summary["tasks"])
+    assert [a for a in seen if a[0] == 1][-1] == (1, 5, 5, 0)  # devices report as they finish
+    assert validate(out) == []
+    assert_same_store(local_store, out)
+
+
 def test_ray_refuses_cuda_without_gpus_before_writing(tmp_path):
     pytest.importorskip("ray", reason="the Ray executor needs the ray extra: pip install 'drape[ray]'")
     out = tmp_path / "none.zarr"
