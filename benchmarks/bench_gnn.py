@@ -96,9 +96,13 @@ def main() -> None:
         for label, static in runs:
             module.model.set_static_shapes(static)
             for frames, graph in ((1, one), (args.batch, batch)):  # one frame, and a batch of frames per call
-                call = (module.captured_predictor(graph, parallel_branches="two" in label) if "graph" in label
-                        else module.predict_frames)
-                ms, n = per_frame(call, graph, frames)
+                try:
+                    call = (module.captured_predictor(graph, parallel_branches="two" in label) if "graph" in label
+                            else module.predict_frames)
+                    ms, n = per_frame(call, graph, frames)
+                except RuntimeError as exc:  # a capture the device refuses: say so, time the rest
+                    print(f"inference{label}: failed (batch of {frames}): {str(exc).splitlines()[0]}")
+                    continue
                 print(f"inference{label}: {ms:.1f} ms per frame (batch of {frames}, coarse + detail features + "
                       f"detail; {n} runs)")
         module.model.set_static_shapes(False)

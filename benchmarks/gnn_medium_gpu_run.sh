@@ -47,7 +47,10 @@ if [ "$DEVICE" = cuda ]; then  # small, beside GPU 3's share of the simulation
       --seconds 3 > "$OUT/bench_gnn_b60.txt" 2>&1 ) &
   BENCH=$!
 fi
-wait $GEN
+if ! wait $GEN; then  # the staged samples are kept: one device finishes what is left
+  echo "== generating on $GEN_DEVICES failed ($(tail -1 "$OUT/generate.log")); resuming on cuda:0"
+  ( time python -m datagen.cli generate $GEN_ARGS --out "$STORE" --device "${GEN_DEVICES%%,*}" ) >> "$OUT/generate.log" 2>&1
+fi
 filter < "$OUT/generate.log" | tail -n 20
 python -m datagen.cli validate "$STORE" 2>&1 | tail -3 | tee "$OUT/validate.txt"
 python -m datagen.cli info "$STORE" > "$OUT/info.txt" 2>&1
