@@ -164,7 +164,8 @@ def _cmd_generate(args) -> int:
                   "scene failed, so no garment-frame was stored (drape info lists why)")
         for t in summary.get("tasks", []):
             if "device" in t:  # the local executor on several devices
-                where = f"{t['device']} (pid {t['pid']})"
+                gpu = f", CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']}" if t["device"].startswith("cuda") else ""
+                where = f"{t['device']} (pid {t['pid']}{gpu})"
             else:
                 where = (f"GPU {t['gpus']} (CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']})" if t["gpus"]
                          else f"CPU (pid {t['pid']})")

@@ -89,9 +89,24 @@ def _left(writer, todo: list[int]) -> int:
     return len(writer.missing(todo))
 
 
+def pin_gpu(device: str | None) -> str | None:
+    """In a device's own process, before CUDA starts: make ``cuda:N`` the only visible GPU (as Ray
+    does for its tasks) and return ``cuda:0``, so that nothing in the process (warp's default
+    device included) can touch another process's card. A ``CUDA_VISIBLE_DEVICES`` already set is
+    respected: N counts among the GPUs it lists."""
+    if not device or not str(device).startswith("cuda:"):
+        return device
+    n = int(str(device).split(":", 1)[1])
+    visible = os.environ.get("CUDA_VISIBLE_DEVICES")
+    ids = [v.strip() for v in visible.split(",") if v.strip()] if visible else []
+    os.environ["CUDA_VISIBLE_DEVICES"] = ids[n] if n < len(ids) else str(n)
+    return "cuda:0"
+
+
 def _device_process(config_dict, out, indices, device, workers, task, seconds_left, messages) -> None:
     """A device's process: its share, progress and its result (or its error) as messages."""
     t0 = time.perf_counter()
+    name, device = device, pin_gpu(device)
 
     def progress(kind, done, total, scenes):
         if kind == 0 and (done % 20 == 0 or done == total):
@@ -101,7 +116,8 @@ def _device_process(config_dict, out, indices, device, workers, task, seconds_le
         result = stage_share(config_dict, out, indices, device, workers, progress=progress, seconds_left=seconds_left)
         stats = result["stats"]
         messages.put(("done", task, {
-            "task": task, "device": device, "gpus": [], "pid": os.getpid(), "host": os.uname().nodename,
+            "task": task, "device": name, "cuda_visible_devices": os.environ.get("CUDA_VISIBLE_DEVICES"),
+            "gpus": [], "pid": os.getpid(), "host": os.uname().nodename,
             "samples": result["samples"], "seconds": time.perf_counter() - t0,
             "simulate_seconds": stats.get("simulate_seconds", 0.0), "garment_frames": stats.get("garment_frames", 0),
             "wait_seconds": stats.get("wait_seconds", 0.0), "batches": stats.get("batches", 0),

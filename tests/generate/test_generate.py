@@ -349,3 +349,16 @@ def test_motion_files_are_a_motion_source(tmp_path):
     assert not (tmp_path / "short.zarr").exists()
     with pytest.raises(ConfigError, match="does not exist"):
         load_config(DatasetConfig, {**cfg, "train": {**one, "motions": [f"file:{tmp_path / 'none.npz'}"]}})
+
+
+def test_a_device_process_sees_only_its_gpu(monkeypatch):
+    """Each device's process makes its GPU the only visible one (warp's default device included),
+    counting among a CUDA_VISIBLE_DEVICES already set."""
+    from datagen.generate.devices import pin_gpu
+
+    monkeypatch.delenv("CUDA_VISIBLE_DEVICES", raising=False)
+    assert pin_gpu("cuda:2") == "cuda:0" and os.environ["CUDA_VISIBLE_DEVICES"] == "2"
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "4,6")
+    assert pin_gpu("cuda:1") == "cuda:0" and os.environ["CUDA_VISIBLE_DEVICES"] == "6"
+    monkeypatch.setenv("CUDA_VISIBLE_DEVICES", "4,6")
+    assert pin_gpu("cpu") == "cpu" and os.environ["CUDA_VISIBLE_DEVICES"] == "4,6"
