@@ -82,11 +82,7 @@ def stage_share(config_dict: dict, out: str, indices: list[int], device: str | N
         else:
             stats = simulate_samples(plan, todo, device, lambda i, a, s: writer.stage_sample(i, a, s),
                                      progress=progress, deadline=deadline)
-    return {"samples": len(todo) - _left(writer, todo), "stats": stats}
-
-
-def _left(writer, todo: list[int]) -> int:
-    return len(writer.missing(todo))
+    return {"samples": len(todo) - len(writer.missing(todo)), "stats": stats}
 
 
 def pin_gpu(device: str | None) -> str | None:

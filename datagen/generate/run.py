@@ -198,6 +198,6 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
     if stats.get("simulate_seconds"):
         summary |= stats
         summary["garment_frames_per_second"] = stats["garment_frames"] / seconds
-        if "tasks" not in stats:  # several devices: their rates added (run_on_devices)
+        if "tasks" not in stats:  # (several devices give their rates added: run_on_devices)
             summary["simulator_garment_frames_per_second"] = stats["garment_frames"] / stats["simulate_seconds"]
     return summary
