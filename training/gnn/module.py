@@ -56,7 +56,7 @@ class GNNModule(pl.LightningModule):
         copies a batch's inputs into the graph's buffers, replays it and returns (coarse, detail),
         tensors the next call overwrites. The model is switched to static shapes
         (:meth:`DetailAwareGNN.set_static_shapes`: the same outputs). A single frame's forward pass
-        is ~1,400 launches, most of its time on the host; a replay is one. With
+        is ~900 kernel launches, most of its time on the host; a replay is one. With
         ``parallel_branches`` each step's magnitude and direction branches are captured on two
         streams, so the graph runs them side by side (:meth:`DetailAwareGNN.set_side_stream`); off
         by default until it has run on a GPU (its test and ``benchmarks/bench_gnn.py`` cover both)."""
