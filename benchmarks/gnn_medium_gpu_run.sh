@@ -4,6 +4,10 @@
 # was, twice, and the store and runs with it). Figures go to $OUT, packed at the end into
 # $OUT/medium_run.tgz (the device tool returns few files) without anything large.
 #   OUT=/tmp/out bash benchmarks/gnn_medium_gpu_run.sh
+# On the lent hosts (no anny, pymeshlab or warp installed): first the uploads (.gpu/a with the
+# medium garments' cache, then .gpu/b with the body's), then this with `source .gpu/c/activate` and
+# DRAPE_CACHE_DIR pointing at the uploaded cache; the three calls back to back, since a host left
+# idle for 30 s is given back with everything on it.
 # 1. `drape generate --preset medium --device cuda:0,cuda:1,cuda:2`: one simulating process per GPU,
 #    each a third of the 248 scenes (datagen/generate/devices.py). Meanwhile, alone on GPU 3, the
 #    captured prediction's CUDA tests and the inference benchmark (eager, static, captured on one and
