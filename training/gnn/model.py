@@ -171,6 +171,8 @@ class _Output(nn.Module):
                 d = nn.functional.normalize(self.direction(x, edge_index, batch, loops), dim=-1)
             m = self.magnitude(x, edge_index, batch, loops)
             main.wait_stream(self.side_stream)
+            if not torch.cuda.is_current_stream_capturing():  # eagerly (the warm-up): keep d's memory
+                d.record_stream(main)                          # from the side stream until main is done
             return m * d
         if self.mode == "decomposed":
             m = self.magnitude(x, edge_index, batch, loops)
@@ -284,7 +286,8 @@ class DetailAwareGNN(nn.Module):
         """Run each step's direction branch on ``stream`` (a ``torch.cuda.Stream``; None: on the
         current stream), beside its magnitude branch. Meant for capturing a CUDA graph
         (:meth:`~training.gnn.module.GNNModule.captured_predictor`), where the graph keeps the
-        two streams' order and memory; eagerly, tensors would cross streams unguarded."""
+        two streams' order and memory; eagerly (the capture's warm-up) the direction's output is
+        kept for the main stream with ``record_stream``."""
         for m in self.modules():
             if isinstance(m, _Output):
                 m.side_stream = stream

@@ -69,14 +69,14 @@ class GNNModule(pl.LightningModule):
         inputs = SimpleNamespace(**buffers)  # what predict_frames reads, at fixed addresses
         stream = torch.cuda.Stream()
         stream.wait_stream(torch.cuda.current_stream())
-        with torch.no_grad(), torch.cuda.stream(stream):
-            for _ in range(warmup):
-                self.predict_frames(inputs)
-        torch.cuda.current_stream().wait_stream(stream)
-        graph = torch.cuda.CUDAGraph()
-        if parallel_branches:
-            self.model.set_side_stream(torch.cuda.Stream())
+        # the side stream is warmed up too (its cuBLAS workspace is made outside the capture)
+        self.model.set_side_stream(torch.cuda.Stream() if parallel_branches else None)
         try:
+            with torch.no_grad(), torch.cuda.stream(stream):
+                for _ in range(warmup):
+                    self.predict_frames(inputs)
+            torch.cuda.current_stream().wait_stream(stream)
+            graph = torch.cuda.CUDAGraph()
             with torch.no_grad(), torch.cuda.graph(graph):
                 out = self.predict_frames(inputs)
         finally:
