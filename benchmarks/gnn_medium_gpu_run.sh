@@ -65,6 +65,7 @@ du -sh "$STORE" | tee -a "$OUT/info.txt"
 # 2. eight runs until the evaluations' share of the time
 left=$(minutes_left $((DEADLINE - EVAL_SECONDS - 45)))  # each run's start and end are outside its limit
 echo "== training $(wc -w <<< "$RUNLIST") runs for $left minutes"
+TRAIN_START=$(date +%s)
 pids=""
 for r in $RUNLIST; do
   IFS=: read -r name ablation seed gpu <<< "$r"
@@ -73,6 +74,7 @@ for r in $RUNLIST; do
     --max-minutes "$left" > "$OUT/train_$name.log" 2>&1 & pids="$pids $!"
 done
 wait $pids
+TRAIN_END=$(date +%s)
 for r in $RUNLIST; do IFS=: read -r name _ <<< "$r"; echo "-- $name: $(tail -1 "$OUT/train_$name.log" | cut -c1-200)"; done
 
 # 3. evaluations, ended in time for the logs and Figure 10
@@ -92,6 +94,23 @@ done
 python benchmarks/gnn_ablations.py $(for r in $RUNLIST; do echo "${r%%:*}=$RUNS/${r%%:*}"; done) --out "$OUT" 2>&1 | tail -14
 filter < "$OUT/eval_full-s0.log" | tail -40
 [ -n "$SMI" ] && kill "$SMI" 2>/dev/null
+# mean GPU utilisation per card over the training's samples (the rows between its start and end)
+[ -f "$OUT/gpu_util.csv" ] && python - "$OUT/gpu_util.csv" "$TRAIN_START" "$TRAIN_END" <<'PY' | tee "$OUT/gpu_util_training.txt"
+import csv, sys
+from datetime import datetime
+start, end = float(sys.argv[2]), float(sys.argv[3])
+use = {}
+for row in csv.reader(open(sys.argv[1])):
+    try:
+        t = datetime.strptime(row[0].strip(), "%Y/%m/%d %H:%M:%S.%f").timestamp()
+        gpu, util = int(row[1]), float(row[2].split()[0])
+    except (ValueError, IndexError):
+        continue
+    if start <= t <= end:
+        use.setdefault(gpu, []).append(util)
+for gpu, u in sorted(use.items()):
+    print(f"GPU {gpu}: {sum(u) / len(u):.0f} % utilisation on average over {len(u)} samples of the training (2 runs on it)")
+PY
 tar czf /tmp/medium_run.tgz --exclude='*.ckpt' --exclude='events.out.*' -C "$(dirname "$OUT")" "$(basename "$OUT")"
 mv /tmp/medium_run.tgz "$OUT/"
 ls -la "$OUT/medium_run.tgz"
