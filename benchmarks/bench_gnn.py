@@ -138,8 +138,6 @@ def main() -> None:
                     continue
                 print(f"inference{label}: {ms:.1f} ms per frame (batch of {frames}, coarse + detail features + "
                       f"detail; {n} runs)")
-        if args.compile:
-            compiled_one_frame(module, one, per_frame, dev)
         module.model.set_static_shapes(False)
     module.train()
     opt = torch.optim.Adam(module.parameters(), lr=1e-3)
@@ -158,7 +156,12 @@ def main() -> None:
         sync()
         n += 1
     dt = (time.perf_counter() - t0) / n
-    print(f"training: {1000 * dt:.0f} ms per step of {args.batch} frames = {args.batch / dt:.1f} frames/s ({n} steps)")
+    print(f"training: {1000 * dt:.0f} ms per step of {args.batch} frames = {args.batch / dt:.1f} frames/s ({n} steps)",
+          flush=True)
+    if args.compile:  # last: a compile can take minutes, and a time limit then loses only this row
+        module.eval()
+        with torch.no_grad():
+            compiled_one_frame(module, one, per_frame, dev)
 
 
 if __name__ == "__main__":
