@@ -4,6 +4,8 @@
 # was, twice, and the store and runs with it). Figures go to $OUT, packed at the end into
 # $OUT/medium_run.tgz (the device tool returns few files) without anything large.
 #   OUT=/tmp/out bash benchmarks/gnn_medium_gpu_run.sh
+#   OUT=/tmp/out2 MORE=1 bash benchmarks/gnn_medium_gpu_run.sh   # if the host is still held: the same
+#       eight runs resumed for another command, then evaluated again
 # On the lent hosts (no anny, pymeshlab or warp installed): first the uploads (.gpu/a with the
 # medium garments' cache, then .gpu/b with the body's), then this with `source .gpu/c/activate` and
 # DRAPE_CACHE_DIR pointing at the uploaded cache; the three calls back to back, since a host left
@@ -42,38 +44,45 @@ sed "s/^seed: 0/seed: 1/" "${CONFIG:=benchmarks/configs/gnn_medium.yaml}" > "$RU
 config_of() { [ "$1" = 1 ] && echo "$RUNS/gnn_medium_seed1.yaml" || echo "$CONFIG"; }
 minutes_left() { python -c "print(max(0.5, round(($1 - $(date +%s)) / 60, 2)))"; }
 
-# 1. the store
-( time python -m datagen.cli generate $GEN_ARGS --out "$STORE" --device "$GEN_DEVICES" ) > "$OUT/generate.log" 2>&1 &
-GEN=$!
-if [ "$DEVICE" = cuda ]; then  # on GPU 3, which has no share of the simulation
-  # (about as long as the generation: the runs start when both are done; torch.compile comes last,
-  # so the time limit costs at most its row)
-  ( CUDA_VISIBLE_DEVICES=3 timeout 90 python -m pytest -q -p no:cacheprovider tests/training/test_gnn.py \
-      -k "captured or static or rounds" > "$OUT/captured_test.txt" 2>&1
-    CUDA_VISIBLE_DEVICES=3 timeout ${BENCH_SECONDS:-120} python -u benchmarks/bench_gnn.py --vertices 3500 --batch 60 \
-      --device cuda --seconds 3 --compile > "$OUT/bench_gnn_b60.txt" 2>&1 ) &
-  BENCH=$!
+# 1. the store (MORE=1: kept from the last command on this host; the runs resume instead)
+if [ -z "$MORE" ]; then
+  ( time python -m datagen.cli generate $GEN_ARGS --out "$STORE" --device "$GEN_DEVICES" ) > "$OUT/generate.log" 2>&1 &
+  GEN=$!
+  if [ "$DEVICE" = cuda ]; then  # on GPU 3, which has no share of the simulation
+    # (about as long as the generation: the runs start when both are done; torch.compile comes last,
+    # so the time limit costs at most its row)
+    ( CUDA_VISIBLE_DEVICES=3 timeout 90 python -m pytest -q -p no:cacheprovider tests/training/test_gnn.py \
+        -k "captured or static or rounds" > "$OUT/captured_test.txt" 2>&1
+      CUDA_VISIBLE_DEVICES=3 timeout ${BENCH_SECONDS:-120} python -u benchmarks/bench_gnn.py --vertices 3500 --batch 60 \
+        --device cuda --seconds 3 --compile > "$OUT/bench_gnn_b60.txt" 2>&1 ) &
+    BENCH=$!
+  fi
+  if ! wait $GEN; then  # the staged samples are kept: one device finishes what is left
+    echo "== generating on $GEN_DEVICES failed ($(tail -1 "$OUT/generate.log")); resuming on cuda:0"
+    ( time python -m datagen.cli generate $GEN_ARGS --out "$STORE" --device "${GEN_DEVICES%%,*}" ) >> "$OUT/generate.log" 2>&1
+  fi
+  filter < "$OUT/generate.log" | tail -n 20
+  python -m datagen.cli validate "$STORE" 2>&1 | tail -3 | tee "$OUT/validate.txt"
+  python -m datagen.cli info "$STORE" > "$OUT/info.txt" 2>&1
+  du -sh "$STORE" | tee -a "$OUT/info.txt"
+  [ -n "$BENCH" ] && wait $BENCH
 fi
-if ! wait $GEN; then  # the staged samples are kept: one device finishes what is left
-  echo "== generating on $GEN_DEVICES failed ($(tail -1 "$OUT/generate.log")); resuming on cuda:0"
-  ( time python -m datagen.cli generate $GEN_ARGS --out "$STORE" --device "${GEN_DEVICES%%,*}" ) >> "$OUT/generate.log" 2>&1
-fi
-filter < "$OUT/generate.log" | tail -n 20
-python -m datagen.cli validate "$STORE" 2>&1 | tail -3 | tee "$OUT/validate.txt"
-python -m datagen.cli info "$STORE" > "$OUT/info.txt" 2>&1
-du -sh "$STORE" | tee -a "$OUT/info.txt"
-[ -n "$BENCH" ] && wait $BENCH
 
 # 2. eight runs until the evaluations' share of the time
 left=$(minutes_left $((DEADLINE - EVAL_SECONDS - 45)))  # each run's start and end are outside its limit
-echo "== training $(wc -w <<< "$RUNLIST") runs for $left minutes"
+mode=--force
+if [ -n "$MORE" ]; then  # the limit counts the minutes trained before, so it grows by what is left
+  mode=--resume; left=$(python -c "print(round($(cat "$RUNS/minutes.txt") + $left, 2))")
+fi
+echo "$left" > "$RUNS/minutes.txt"
+echo "== training $(wc -w <<< "$RUNLIST") runs to $left minutes ($mode)"
 TRAIN_START=$(date +%s)
 pids=""
 for r in $RUNLIST; do
   IFS=: read -r name ablation seed gpu <<< "$r"
   CUDA_VISIBLE_DEVICES=$gpu python -m datagen.cli train gnn --data "$STORE" --out "$RUNS/$name" \
-    --config "$(config_of "$seed")" --ablation "$ablation" --device "$DEVICE" --force \
-    --max-minutes "$left" > "$OUT/train_$name.log" 2>&1 & pids="$pids $!"
+    --config "$(config_of "$seed")" --ablation "$ablation" --device "$DEVICE" $mode \
+    --max-minutes "$left" >> "$OUT/train_$name.log" 2>&1 & pids="$pids $!"
 done
 wait $pids
 TRAIN_END=$(date +%s)
