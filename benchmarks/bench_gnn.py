@@ -56,7 +56,7 @@ def compiled_one_frame(module, one, per_frame, dev) -> None:
     to the eager prediction."""
     from types import SimpleNamespace
 
-    names = ("x_coarse", "edge_index", "batch", "attributes", "anchor", "face", "joints", "skin")
+    names = module.PREDICT_INPUTS
 
     def predict(*xs):
         return module.predict_frames(SimpleNamespace(**dict(zip(names, xs, strict=True))))

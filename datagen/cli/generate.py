@@ -103,6 +103,8 @@ def _cmd_generate(args) -> int:
     tty = sys.stdout.isatty()
     started: dict = {}
 
+    side_by_side = args.executor == "ray" or "," in str(args.device)
+
     def progress(kind, done, total, batch):
         key = "frames" if kind == 0 else "scenes"
         desc = f"batch of {batch} scenes" if kind == 0 else "scenes"
@@ -120,7 +122,6 @@ def _cmd_generate(args) -> int:
         bar = bars.get(key)
         # a new batch restarts the frame bar (Ray's tasks, or several devices, run side by side: the bar
         # follows the furthest)
-        side_by_side = args.executor == "ray" or "," in str(args.device)
         if bar is None or bar.total != total or (kind == 0 and done < bar.n and not side_by_side):
             if bar is not None:
                 bar.close()
@@ -164,14 +165,14 @@ def _cmd_generate(args) -> int:
                   "scene failed, so no garment-frame was stored (drape info lists why)")
         for t in summary.get("tasks", []):
             if "device" in t:  # the local executor on several devices
-                gpu = f", CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']}" if t["device"].startswith("cuda") else ""
+                kind, gpu = "process", (f", CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']}"
+                                        if t["device"].startswith("cuda") else "")
                 where = f"{t['device']} (pid {t['pid']}{gpu})"
             else:
-                where = (f"GPU {t['gpus']} (CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']})" if t["gpus"]
-                         else f"CPU (pid {t['pid']})")
+                kind, where = "ray task", (f"GPU {t['gpus']} (CUDA_VISIBLE_DEVICES={t['cuda_visible_devices']})"
+                                           if t["gpus"] else f"CPU (pid {t['pid']})")
             rate = f", {t['garment_frames'] / t['simulate_seconds']:.2f} garment-frames/s in the simulator" \
                 if t["simulate_seconds"] else ""
-            kind = "process" if "device" in t else "ray task"
             print(f"  {kind} {t['task']} on {t['host']} {where}: {t['samples']} scenes in {t['seconds']:.0f} s"
                   f"{rate}")
     problems = validate(args.out)

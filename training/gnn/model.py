@@ -26,6 +26,8 @@ straight to the detailed garment), ``no_pooling``.
 
 from __future__ import annotations
 
+import contextlib
+
 import torch
 from torch import nn
 
@@ -164,19 +166,18 @@ class _Output(nn.Module):
                                   last, pool_after=pool_after)
 
     def forward(self, x, edge_index, batch, loops) -> torch.Tensor:
-        if self.mode == "decomposed" and self.side_stream is not None:
-            main = torch.cuda.current_stream()
-            self.side_stream.wait_stream(main)
-            with torch.cuda.stream(self.side_stream):
+        if self.mode == "decomposed":
+            side = self.side_stream
+            main = None if side is None else torch.cuda.current_stream()
+            if side is not None:
+                side.wait_stream(main)
+            with torch.cuda.stream(side) if side is not None else contextlib.nullcontext():
                 d = nn.functional.normalize(self.direction(x, edge_index, batch, loops), dim=-1)
             m = self.magnitude(x, edge_index, batch, loops)
-            main.wait_stream(self.side_stream)
-            if not torch.cuda.is_current_stream_capturing():  # eagerly (the warm-up): keep d's memory
-                d.record_stream(main)                          # from the side stream until main is done
-            return m * d
-        if self.mode == "decomposed":
-            m = self.magnitude(x, edge_index, batch, loops)
-            d = nn.functional.normalize(self.direction(x, edge_index, batch, loops), dim=-1)
+            if side is not None:
+                main.wait_stream(side)
+                if not torch.cuda.is_current_stream_capturing():  # eagerly (the warm-up): keep d's memory
+                    d.record_stream(main)                          # from the side stream until main is done
             return m * d
         out = self.direct(x, edge_index, batch, loops)
         return OUTPUT_LIMIT * out if self.mode == "limited" else out

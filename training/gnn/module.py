@@ -29,6 +29,9 @@ def detail_features(coarse: torch.Tensor, batch) -> torch.Tensor:
 class GNNModule(pl.LightningModule):
     """The Lightning module of paper 000's GNN (config: :class:`training.config.TrainConfig` as a dict)."""
 
+    PREDICT_INPUTS = ("x_coarse", "edge_index", "batch", "attributes", "anchor", "face", "joints", "skin")
+    """The batch's fields :meth:`predict_frames` reads (what a captured or compiled prediction takes)."""
+
     def __init__(self, config: dict, attribute_features: int):
         super().__init__()
         self.save_hyperparameters()
@@ -64,7 +67,7 @@ class GNNModule(pl.LightningModule):
             raise ValueError("a CUDA graph needs the batch on a CUDA device")
         self.eval()
         self.model.set_static_shapes(True)
-        names = ("x_coarse", "edge_index", "batch", "attributes", "anchor", "face", "joints", "skin")
+        names = self.PREDICT_INPUTS
         buffers = {k: getattr(example, k).clone() for k in names}
         inputs = SimpleNamespace(**buffers)  # what predict_frames reads, at fixed addresses
         stream = torch.cuda.Stream()

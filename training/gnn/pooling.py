@@ -97,8 +97,7 @@ def handshake_matching(edge_index: torch.Tensor, score: torch.Tensor, num_nodes:
         matched_edge[:-1] = torch.where(accepted, reverse[edge], matched_edge[:-1])
         matched_edge.scatter_(0, torch.where(accepted, src[edge], num_nodes), edge)  # the rest into the sink
         free_node = matched_edge[:-1] < 0
-    matched_edge = matched_edge[:-1]
-    return matched_edge
+    return matched_edge[:-1]
 
 
 def _pairs(edge_index: torch.Tensor, edge_score: torch.Tensor, num_nodes: int) -> tuple[torch.Tensor, ...]:
