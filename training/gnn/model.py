@@ -6,7 +6,7 @@
   self + 4 x 32 attention).
 - :class:`CoarseNet` (W_coarse, eq. 5-6): one 256-wide block with Tanh, then a magnitude and a
   direction branch of three blocks [512, 512, 256] and fully connected layers [256, 128, 1] (ReLU,
-  the last Softplus: see :class:`_Output`) and [256, 128, 3] (Tanh, then normalised to unit
+  the last |x|: see :class:`Magnitude`) and [256, 128, 3] (Tanh, then normalised to unit
   length); Δ = |Δ| ⊙ δ (eq. 4).
 - :class:`ParserNet` (W_parser): (α, β, θ) through fully connected layers [256, 512, 1024], ReLU.
 - :class:`DetailNet` (W_detail, eq. 7-9): a 1024-wide block multiplied element-wise by the parser's
@@ -134,17 +134,28 @@ ONE_BRANCH_SCALE = 1.5
 model's parameters (twice the width, as before 2026-11-25, gave 1.45x)."""
 
 
+class Magnitude(nn.Module):
+    """The magnitude's last activation: |x|. Non-negative as ReLU (§5.1) is, with gradient ±1 everywhere.
+
+    §5.1's ReLU: the head's hidden features come out of ReLUs, positive and alike from node to
+    node, so its output has about one sign over the whole graph; where that sign turned negative
+    (at the start, or while the direction was still random and the MSE asked for |Δ| = 0) the ReLU
+    gave 0 with zero gradient at every node, for good (W_detail in every run on `medium`, 2026-11-26).
+    Softplus, used instead until 2026-11-27, only moved the trap: early on the MSE pulls the
+    magnitude down, Adam's steps (as large for a small gradient as for a big one) carry the
+    pre-activation far below zero, and there Softplus's gradient (≈ its value) falls under Adam's
+    ε, so the step stops learning just as well (W_detail in four of six decomposed runs on `medium`
+    on 4 x H200, docs/bench/gnn_medium_h200x4_20261127; on four grid garments with hard targets in
+    six seeds of six, tests/training/test_gnn.py). |x| has no flat tail to fall into: a magnitude
+    driven through 0 comes back with the same gradient."""
+
+    def forward(self, x: torch.Tensor) -> torch.Tensor:
+        return x.abs()
+
+
 class _Output(nn.Module):
     """Δ from node features: magnitude x unit direction (eq. 4), or one branch for the ablations.
-
-    The magnitude's last activation is Softplus where §5.1 has ReLU. Its hidden features come out
-    of ReLUs, so they are positive and alike from node to node, and the last layer's output has
-    about one sign over the whole graph: where that sign was negative at the start, or became so
-    while the direction was still random (the MSE then asks for |Δ| = 0), a ReLU gave 0 with zero
-    gradient at every node and the step never learned again. That happened to W_detail in every
-    run on the `medium` store (its training loss stayed at the targets' mean square for 13 epochs,
-    docs/training.md) and in a probe from the first steps (tests/training/test_gnn.py). Softplus is
-    positive, as a magnitude must be, and never without gradient."""
+    The magnitude's last activation is :class:`Magnitude` (|x|) where §5.1 has ReLU."""
 
     side_stream = None
     """A CUDA stream for the direction branch, set while a prediction is captured as a CUDA graph
@@ -157,7 +168,7 @@ class _Output(nn.Module):
         super().__init__()
         self.mode = mode
         if mode == "decomposed":
-            self.magnitude = _Branch(in_channels, widths, [*head, 1], nn.ReLU, nn.Softplus(), pool_after=pool_after)
+            self.magnitude = _Branch(in_channels, widths, [*head, 1], nn.ReLU, Magnitude(), pool_after=pool_after)
             self.direction = _Branch(in_channels, widths, [*head, 3], nn.Tanh, nn.Tanh(), pool_after=pool_after)
         else:  # one branch, wider by ONE_BRANCH_SCALE: about the two branches' parameters
             wide = [8 * int(round(w * ONE_BRANCH_SCALE / 8)) for w in widths]  # GAT: 4 heads on each half
