@@ -49,11 +49,12 @@ def grid_frame(vertices: int, seed: int = 0):
                 face=faces.T.contiguous())
 
 
-def compiled_one_frame(module, one, per_frame, dev) -> None:
+def compiled_one_frame(module, one, per_frame, dev, tf32: bool = False) -> None:
     """One frame's prediction through ``torch.compile`` (static shapes): inductor fuses the
     elementwise work of ~1,500 operations into fewer kernels; on CUDA ``reduce-overhead`` also
     replays them as CUDA graphs. Prints the compile time, ms per frame and the largest difference
-    to the eager prediction."""
+    to the eager prediction (in float32 matmuls also where ``tf32``: the compiled model's matrix
+    products then run on TF32 tensor cores, 10-bit mantissas, and the difference says what that costs)."""
     from types import SimpleNamespace
 
     names = module.PREDICT_INPUTS
@@ -64,18 +65,24 @@ def compiled_one_frame(module, one, per_frame, dev) -> None:
     mode = "reduce-overhead" if dev.type == "cuda" else "default"
     module.model.set_static_shapes(True)
     inputs = [getattr(one, k) for k in names]
+    eager = predict(*inputs)
+    label = mode + (", TF32 matmuls" if tf32 else "")
     try:
+        if tf32:
+            torch._dynamo.reset()
+            torch.set_float32_matmul_precision("high")
         t0 = time.perf_counter()
         compiled = torch.compile(predict, mode=mode, dynamic=False)
         out = compiled(*inputs)
         seconds = time.perf_counter() - t0
-        eager = predict(*inputs)
         diff = max(float((a - b).abs().max()) for a, b in zip(out, eager, strict=True))
         ms, n = per_frame(lambda _: compiled(*inputs), one, 1)
     except Exception as exc:  # noqa: BLE001 (a benchmark row: say what failed, time the rest)
-        print(f"inference, torch.compile ({mode}): failed: {type(exc).__name__}: {str(exc).splitlines()[0][:300]}")
+        print(f"inference, torch.compile ({label}): failed: {type(exc).__name__}: {str(exc).splitlines()[0][:300]}")
         return
-    print(f"inference, torch.compile ({mode}): {ms:.1f} ms per frame (batch of 1; {n} runs; compiled in "
+    finally:
+        torch.set_float32_matmul_precision("highest")
+    print(f"inference, torch.compile ({label}): {ms:.1f} ms per frame (batch of 1; {n} runs; compiled in "
           f"{seconds:.0f} s; largest difference to eager {diff:.2e} m)")
 
 
@@ -89,6 +96,8 @@ def main() -> None:
     ap.add_argument("--compile", action="store_true",
                     help="also one frame through torch.compile (static shapes; on CUDA mode reduce-overhead, which "
                          "fuses the kernels and replays them as CUDA graphs): compile time, ms, difference to eager")
+    ap.add_argument("--tf32", action="store_true", help="with --compile: a second compiled row with TF32 matmuls")
+    ap.add_argument("--compile-only", action="store_true", help="with --compile: only the compiled rows")
     args = ap.parse_args()
     from torch_geometric.data import Batch
 
@@ -123,8 +132,8 @@ def main() -> None:
     with torch.no_grad():
         # as trained; with static shapes (the same outputs); and on a GPU captured as one CUDA graph
         # (the graph with each step's two branches on one stream, then side by side on two)
-        runs = [("", False), (", static shapes", True)]
-        if dev.type == "cuda":
+        runs = [] if args.compile_only else [("", False), (", static shapes", True)]
+        if dev.type == "cuda" and not args.compile_only:
             runs += [(", one CUDA graph, one stream", True), (", one CUDA graph, two streams", True)]
         for label, static in runs:
             module.model.set_static_shapes(static)
@@ -143,25 +152,28 @@ def main() -> None:
     opt = torch.optim.Adam(module.parameters(), lr=1e-3)
     module.log = lambda *a, **k: None  # noqa: E731 (no trainer attached)
     module.log_dict = lambda *a, **k: None  # noqa: E731
-    for _ in range(2):
+    for _ in range(0 if args.compile_only else 2):
         opt.zero_grad()
         module.training_step(batch, 0).backward()
         opt.step()
     sync()
     n, t0 = 0, time.perf_counter()
-    while time.perf_counter() - t0 < args.seconds:
+    while not args.compile_only and time.perf_counter() - t0 < args.seconds:
         opt.zero_grad()
         module.training_step(batch, 0).backward()
         opt.step()
         sync()
         n += 1
-    dt = (time.perf_counter() - t0) / n
-    print(f"training: {1000 * dt:.0f} ms per step of {args.batch} frames = {args.batch / dt:.1f} frames/s ({n} steps)",
-          flush=True)
+    if n:
+        dt = (time.perf_counter() - t0) / n
+        print(f"training: {1000 * dt:.0f} ms per step of {args.batch} frames = {args.batch / dt:.1f} frames/s ({n} steps)",
+              flush=True)
     if args.compile:  # last: a compile can take minutes, and a time limit then loses only this row
         module.eval()
         with torch.no_grad():
             compiled_one_frame(module, one, per_frame, dev)
+            if args.tf32:
+                compiled_one_frame(module, one, per_frame, dev, tf32=True)
 
 
 if __name__ == "__main__":
