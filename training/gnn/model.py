@@ -144,7 +144,7 @@ class Magnitude(nn.Module):
     Softplus, used instead until 2026-11-27, only moved the trap: early on the MSE pulls the
     magnitude down, Adam's steps (as large for a small gradient as for a big one) carry the
     pre-activation far below zero, and there Softplus's gradient (≈ its value) falls under Adam's
-    ε, so the step stops learning just as well (W_detail in four of six decomposed runs on `medium`
+    ε, so the step stops learning just as well (W_detail in five of six decomposed runs on `medium`
     on 4 x H200, docs/bench/gnn_medium_h200x4_20261127; on four grid garments with hard targets in
     six seeds of six, tests/training/test_gnn.py). |x| has no flat tail to fall into: a magnitude
     driven through 0 comes back with the same gradient."""
