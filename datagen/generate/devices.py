@@ -85,6 +85,18 @@ def stage_share(config_dict: dict, out: str, indices: list[int], device: str | N
     return {"samples": len(todo) - len(writer.missing(todo)), "stats": stats}
 
 
+def task_record(task: int, started: float, result: dict, **where) -> dict:
+    """What one share's process (a device's, or a Ray task) reports: ``where`` it ran (``gpus``,
+    ``cuda_visible_devices``, ...), its pid and host, and from :func:`stage_share`'s ``result`` the
+    samples it simulated and the pipeline's timings; ``started``: its ``time.perf_counter()`` at the start."""
+    stats = result["stats"]
+    return {"task": task, **where, "pid": os.getpid(), "host": os.uname().nodename, "samples": result["samples"],
+            "seconds": time.perf_counter() - started,
+            "simulate_seconds": stats.get("simulate_seconds", 0.0), "garment_frames": stats.get("garment_frames", 0),
+            "wait_seconds": stats.get("wait_seconds", 0.0), "batches": stats.get("batches", 0),
+            "stopped": stats.get("stopped", 0)}
+
+
 def pin_gpu(device: str | None) -> str | None:
     """In a device's own process, before CUDA starts: make ``cuda:N`` the only visible GPU (as Ray
     does for its tasks) and return ``cuda:0``, so that nothing in the process (warp's default
@@ -110,14 +122,8 @@ def _device_process(config_dict, out, indices, device, workers, task, seconds_le
 
     try:
         result = stage_share(config_dict, out, indices, device, workers, progress=progress, seconds_left=seconds_left)
-        stats = result["stats"]
-        messages.put(("done", task, {
-            "task": task, "device": name, "cuda_visible_devices": os.environ.get("CUDA_VISIBLE_DEVICES"),
-            "gpus": [], "pid": os.getpid(), "host": os.uname().nodename,
-            "samples": result["samples"], "seconds": time.perf_counter() - t0,
-            "simulate_seconds": stats.get("simulate_seconds", 0.0), "garment_frames": stats.get("garment_frames", 0),
-            "wait_seconds": stats.get("wait_seconds", 0.0), "batches": stats.get("batches", 0),
-            "stopped": stats.get("stopped", 0)}))
+        messages.put(("done", task, task_record(task, t0, result, device=name, gpus=[],
+                                                cuda_visible_devices=os.environ.get("CUDA_VISIBLE_DEVICES"))))
     except BaseException as exc:  # noqa: BLE001 (reported to the driver, which raises it)
         messages.put(("error", task, f"{type(exc).__name__}: {exc}", isinstance(exc, InputError)))
 

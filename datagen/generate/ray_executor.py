@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 
 from datagen.errors import InputError
-from datagen.generate.devices import shares, stage_share
+from datagen.generate.devices import shares, stage_share, task_record
 
 __all__ = ["RayCluster", "import_ray", "shares", "uses_gpu"]
 
@@ -60,10 +60,7 @@ def _task(config_dict: dict, out: str, indices: list[int], device: str | None, w
             queue.put_nowait((task, done, total, scenes))
 
     result = stage_share(config_dict, out, indices, device, workers, progress=progress)
-    stats = result["stats"]
-    return {"task": task, "gpus": gpus, "cuda_visible_devices": visible, "pid": os.getpid(),
-            "host": os.uname().nodename, "samples": result["samples"], "seconds": time.perf_counter() - t0,
-            "simulate_seconds": stats.get("simulate_seconds", 0.0), "garment_frames": stats.get("garment_frames", 0)}
+    return task_record(task, t0, result, gpus=gpus, cuda_visible_devices=visible)
 
 
 class RayCluster:
