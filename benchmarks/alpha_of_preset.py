@@ -16,7 +16,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from datagen.generate.config import resolve_config  # noqa: E402
-from datagen.generate.plan import Plan, _fit  # noqa: E402
+from datagen.generate.plan import Plan, fit_alpha  # noqa: E402
 
 
 def main() -> None:
@@ -26,7 +26,7 @@ def main() -> None:
     args = ap.parse_args()
     plan = Plan(resolve_config(args.config, preset=None if args.config else args.preset))
     garments = [plan.garment(g) for g in range(len(plan.instances))]
-    alpha, _, diagnostics = _fit(plan, garments)
+    alpha, _, diagnostics = fit_alpha(plan, garments)
     splits: dict[int, set] = {}
     for s in plan.scenes:
         splits.setdefault(s.garment, set()).add(s.split)

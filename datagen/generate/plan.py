@@ -173,7 +173,7 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
                      *plan.instances[g], len(garments[-1].vertices), seconds, time.perf_counter() - t0)
     regions = sorted({r for g in garments for r in g.region_names})
     materials = list(MATERIALS)
-    alpha, fa, plan.fit_diagnostics = _fit(plan, garments)
+    alpha, fa, plan.fit_diagnostics = fit_alpha(plan, garments)
     vs = np.concatenate([[0], np.cumsum([len(g.vertices) for g in garments])]).astype(np.int64)
     fs = np.concatenate([[0], np.cumsum([len(g.faces) for g in garments])]).astype(np.int64)
     garment_arrays = {
@@ -207,7 +207,7 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
     }
 
 
-def _fit(plan: Plan, garments: list) -> tuple[np.ndarray, dict, dict]:
+def fit_alpha(plan: Plan, garments: list) -> tuple[np.ndarray, dict, dict]:
     """(α [G, 3] float32, the fit group's arrays, diagnostics): a factor analysis over the training
     split's garment-body pairs, or NaN α, D = 0 arrays and {} when the config has no fit attribute."""
     import logging
