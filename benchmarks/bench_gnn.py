@@ -49,12 +49,14 @@ def grid_frame(vertices: int, seed: int = 0):
                 face=faces.T.contiguous())
 
 
-def compiled_one_frame(module, one, per_frame, dev, tf32: bool = False) -> None:
+def compiled_one_frame(module, one, per_frame, dev, tf32: bool = False, mode: str | None = None) -> None:
     """One frame's prediction through ``torch.compile`` (static shapes): inductor fuses the
     elementwise work of ~1,500 operations into fewer kernels; on CUDA ``reduce-overhead`` also
     replays them as CUDA graphs. Prints the compile time, ms per frame and the largest difference
     to the eager prediction (in float32 matmuls also where ``tf32``: the compiled model's matrix
-    products then run on TF32 tensor cores, 10-bit mantissas, and the difference says what that costs)."""
+    products then run on TF32 tensor cores, 10-bit mantissas, and the difference says what that costs).
+    ``mode`` overrides inductor's mode (``max-autotune``: it also times candidate kernels for each
+    matrix product and keeps the fastest, with CUDA graphs; minutes to compile)."""
     from types import SimpleNamespace
 
     names = module.PREDICT_INPUTS
@@ -62,14 +64,14 @@ def compiled_one_frame(module, one, per_frame, dev, tf32: bool = False) -> None:
     def predict(*xs):
         return module.predict_frames(SimpleNamespace(**dict(zip(names, xs, strict=True))))
 
-    mode = "reduce-overhead" if dev.type == "cuda" else "default"
+    mode = mode or ("reduce-overhead" if dev.type == "cuda" else "default")
     module.model.set_static_shapes(True)
     inputs = [getattr(one, k) for k in names]
     eager = predict(*inputs)
     label = mode + (", TF32 matmuls" if tf32 else "")
     try:
+        torch._dynamo.reset()
         if tf32:
-            torch._dynamo.reset()
             torch.set_float32_matmul_precision("high")
         t0 = time.perf_counter()
         compiled = torch.compile(predict, mode=mode, dynamic=False)
@@ -98,6 +100,8 @@ def main() -> None:
                          "fuses the kernels and replays them as CUDA graphs): compile time, ms, difference to eager")
     ap.add_argument("--tf32", action="store_true", help="with --compile: a second compiled row with TF32 matmuls")
     ap.add_argument("--compile-only", action="store_true", help="with --compile: only the compiled rows")
+    ap.add_argument("--max-autotune", action="store_true",
+                    help="with --compile: also a row compiled in inductor's max-autotune mode (float32 matmuls)")
     args = ap.parse_args()
     from torch_geometric.data import Batch
 
@@ -172,6 +176,8 @@ def main() -> None:
         module.eval()
         with torch.no_grad():
             compiled_one_frame(module, one, per_frame, dev)
+            if args.max_autotune:
+                compiled_one_frame(module, one, per_frame, dev, mode="max-autotune")
             if args.tf32:
                 compiled_one_frame(module, one, per_frame, dev, tf32=True)
 

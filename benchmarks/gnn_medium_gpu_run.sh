@@ -19,12 +19,25 @@
 # 3. `drape evaluate --split test`: the full runs on every test frame, the ablations on a third;
 #    Figure 10 and its table (benchmarks/gnn_ablations.py).
 # On a one-GPU host: GEN_DEVICES=cuda:0 and a RUNLIST whose runs all name GPU 0.
+# On a two-GPU host (TWO_GPUS=1): the store on both GPUs, the CUDA tests beside the generation on
+# GPU 1, four runs to a GPU, and the inference benchmark after the evaluations (alone on GPU 0) in
+# the command that evaluates. Switches for a session of several commands:
+#   NO_EVAL=1          train only (a later MORE=1 command evaluates)
+#   EVAL_RUNS="a b"    evaluate these runs on the test split (default: all; Figure 10 is always all)
+#   BENCH_AFTER=1      the inference benchmark (torch.compile rows) after the evaluations
 set -o pipefail
 OUT=${OUT:-/tmp/gnn-medium-out}; STORE=${STORE:-/tmp/medium.zarr}; RUNS=${RUNS:-/tmp/runs}
 BUDGET=${BUDGET:-570}; T0=$(date +%s); DEADLINE=$((T0 + BUDGET)); DEVICE=${DEVICE:-cuda}
 EVAL_SECONDS=${EVAL_SECONDS:-300}  # 150 did not do: eight evaluations at once took ~250 s on 4 x H200
 GEN_ARGS=${GEN_ARGS:---preset medium}  # a config file instead, for a dry run on the CPU
 GEN_DEVICES=${GEN_DEVICES:-cuda:0,cuda:1,cuda:2}  # GPU 3 times inference meanwhile, alone on its card
+TEST_GPU=3
+if [ -n "$TWO_GPUS" ]; then
+  GEN_DEVICES=cuda:0,cuda:1; TEST_GPU=1; NO_BENCH_DURING=1; export OMP_NUM_THREADS=3
+  RUNLIST=${RUNLIST:-"full-s0:full:0:0 full-s1:full:1:1 no_decomposition:no_decomposition:0:0 output_limit:output_limit:0:1
+no_parser:no_parser:0:0 concat_parser:concat_parser:0:1 single_step:single_step:0:0 no_pooling:no_pooling:0:1"}
+fi
+BENCH_SECONDS_AFTER=${BENCH_SECONDS_AFTER:-0}; [ -n "$BENCH_AFTER" ] && BENCH_SECONDS_AFTER=${BENCH_SECONDS:-150}
 mkdir -p "$OUT" "$RUNS"
 # eight trainings and evaluations share 64 cores: without a limit each takes a thread per core
 # (on 2026-11-27 eight evaluations of 960 frames did not end in 290 s)
@@ -50,11 +63,11 @@ if [ -z "$MORE" ]; then
   GEN=$!
   if [ "$DEVICE" = cuda ]; then  # on GPU 3, which has no share of the simulation
     # (about as long as the generation: the runs start when both are done; torch.compile comes last,
-    # so the time limit costs at most its row)
-    ( CUDA_VISIBLE_DEVICES=3 timeout 90 python -m pytest -q -p no:cacheprovider tests/training/test_gnn.py \
-        -k "captured or static or rounds" > "$OUT/captured_test.txt" 2>&1
-      CUDA_VISIBLE_DEVICES=3 timeout ${BENCH_SECONDS:-120} python -u benchmarks/bench_gnn.py --vertices 3500 --batch 60 \
-        --device cuda --seconds 3 --compile > "$OUT/bench_gnn_b60.txt" 2>&1 ) &
+    # so the time limit costs at most its row); on two GPUs only the tests, beside a simulation
+    ( CUDA_VISIBLE_DEVICES=$TEST_GPU timeout 90 python -m pytest -q -p no:cacheprovider tests/training/test_gnn.py \
+        -k "captured or static or rounds or magnitude" > "$OUT/captured_test.txt" 2>&1
+      [ -n "$NO_BENCH_DURING" ] || CUDA_VISIBLE_DEVICES=$TEST_GPU timeout ${BENCH_SECONDS:-120} python -u \
+        benchmarks/bench_gnn.py --vertices 3500 --batch 60 --device cuda --seconds 3 --compile > "$OUT/bench_gnn_b60.txt" 2>&1 ) &
     BENCH=$!
   fi
   if ! wait $GEN; then  # the staged samples are kept: one device finishes what is left
@@ -69,7 +82,8 @@ if [ -z "$MORE" ]; then
 fi
 
 # 2. eight runs until the evaluations' share of the time
-left=$(minutes_left $((DEADLINE - EVAL_SECONDS - 45)))  # each run's start and end are outside its limit
+[ -n "$NO_EVAL" ] && EVAL_SECONDS=0
+left=$(minutes_left $((DEADLINE - EVAL_SECONDS - BENCH_SECONDS_AFTER - 45)))  # each run's start and end are outside its limit
 mode=--force
 if [ -n "$MORE" ]; then  # the limit counts the minutes trained before, so it grows by what is left
   mode=--resume; left=$(python -c "print(round($(cat "$RUNS/minutes.txt") + $left, 2))")
@@ -89,10 +103,12 @@ TRAIN_END=$(date +%s)
 for r in $RUNLIST; do IFS=: read -r name _ <<< "$r"; echo "-- $name: $(tail -1 "$OUT/train_$name.log" | cut -c1-200)"; done
 
 # 3. evaluations, ended in time for the logs and Figure 10
-left=$((DEADLINE - 25 - $(date +%s)))
+left=$((DEADLINE - 25 - BENCH_SECONDS_AFTER - $(date +%s)))
 pids=""
-for r in $RUNLIST; do
+[ -n "$NO_EVAL" ] && RUNS_TO_EVAL="" || RUNS_TO_EVAL=$RUNLIST
+for r in $RUNS_TO_EVAL; do
   IFS=: read -r name ablation seed gpu <<< "$r"
+  [ -n "$EVAL_RUNS" ] && ! grep -qw -- "$name" <<< "$EVAL_RUNS" && continue
   frames=""; [ "$ablation" = full ] || frames="--max-frames ${ABLATION_FRAMES:-860}"
   CUDA_VISIBLE_DEVICES=$gpu timeout "$left" python -m datagen.cli evaluate "$RUNS/$name" --data "$STORE" --split test \
     --json "$RUNS/$name/eval_test.json" --device "$DEVICE" $frames > "$OUT/eval_$name.log" 2>&1 & pids="$pids $!:$name"
@@ -106,7 +122,12 @@ for r in $RUNLIST; do
   cp "$RUNS/$name"/*.json "$OUT/logs_$name/" 2>/dev/null
 done
 python benchmarks/gnn_ablations.py $(for r in $RUNLIST; do echo "${r%%:*}=$RUNS/${r%%:*}"; done) --out "$OUT" 2>&1 | tail -14
-filter < "$OUT/eval_full-s0.log" | tail -40
+[ -f "$OUT/eval_full-s0.log" ] && filter < "$OUT/eval_full-s0.log" | tail -40
+if [ -n "$BENCH_AFTER" ] && [ "$DEVICE" = cuda ]; then  # alone on GPU 0 now: the compiled rows only
+  CUDA_VISIBLE_DEVICES=0 timeout "$BENCH_SECONDS_AFTER" python -u benchmarks/bench_gnn.py --vertices 3500 --batch 60 \
+    --device cuda --seconds 3 --compile --compile-only --max-autotune --tf32 > "$OUT/bench_gnn_compiled.txt" 2>&1
+  filter < "$OUT/bench_gnn_compiled.txt" | tail -8
+fi
 [ -n "$SMI" ] && kill "$SMI" 2>/dev/null
 # mean GPU utilisation per card over the training's samples (the rows between its start and end)
 [ -f "$OUT/gpu_util.csv" ] && python - "$OUT/gpu_util.csv" "$TRAIN_START" "$TRAIN_END" <<'PY' | tee "$OUT/gpu_util_training.txt"
@@ -123,7 +144,7 @@ for row in csv.reader(open(sys.argv[1])):
     if start <= t <= end:
         use.setdefault(gpu, []).append(util)
 for gpu, u in sorted(use.items()):
-    print(f"GPU {gpu}: {sum(u) / len(u):.0f} % utilisation on average over {len(u)} samples of the training (2 runs on it)")
+    print(f"GPU {gpu}: {sum(u) / len(u):.0f} % utilisation on average over {len(u)} samples of the training")
 PY
 tar czf /tmp/medium_run.tgz --exclude='*.ckpt' --exclude='events.out.*' -C "$(dirname "$OUT")" "$(basename "$OUT")"
 mv /tmp/medium_run.tgz "$OUT/"

@@ -30,7 +30,8 @@ class TrainConfig:
         ablation: the model variant (paper 000 §5.3; ``full`` is the paper's model).
         target_scale: the regression targets (metres) are multiplied by this in the loss (100: cm).
         max_train_frames: frames drawn (seeded, once) from the train split; None: all.
-        max_val_frames: frames drawn from the validation split for the per-epoch error.
+        max_val_frames: frames drawn from the validation split for the per-epoch error (the GNN draws
+            them with seed 0 whatever the run's seed, so that runs compare on the same frames).
         epoch_frames: frames an epoch trains on, drawn afresh (seeded) from the train split every
             epoch; None: an epoch is the whole split. On a large store it makes the validation error
             (the curves, early stopping, the plateau schedule, the best checkpoint) come more often

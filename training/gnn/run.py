@@ -64,7 +64,8 @@ def train_gnn(data: str | Path, out: str | Path, config: TrainConfig, *, device:
     accelerator = resolve_device(device)
     store = open_store(data)
     train = FrameDataset(store, "train", max_frames=config.max_train_frames, seed=config.seed)
-    val = FrameDataset(store, "val", max_frames=config.max_val_frames, seed=config.seed)
+    # the same validation frames for every seed, so that runs' validation errors compare
+    val = FrameDataset(store, "val", max_frames=config.max_val_frames, seed=0)
     meta = {"kind": KIND, "config": config.as_dict(), "store": _store_identity(store)}
     out = prepare_run(out, resume=resume, force=force, meta=meta)
     seed_everything(config.seed)
