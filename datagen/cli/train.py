@@ -304,7 +304,12 @@ def _cmd_evaluate(args) -> int:
     else:
         from training.gnn.run import evaluate_gnn, format_evaluation
 
-        e = evaluate_gnn(args.run, data=args.data, split=args.split, max_frames=args.max_frames, device=args.device)
+        from datagen.cli.progress import reporter
+
+        progress = reporter(f"evaluating on {args.split}", "frame")
+        e = evaluate_gnn(args.run, data=args.data, split=args.split, max_frames=args.max_frames, device=args.device,
+                         progress=progress)
+        progress.close()
         print(format_evaluation(e))
     if args.json:
         Path(args.json).write_text(json.dumps(e, indent=2))

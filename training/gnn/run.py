@@ -14,7 +14,7 @@ from __future__ import annotations
 import json
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import torch
@@ -93,8 +93,10 @@ def load_module(run: str | Path, *, checkpoint: str = "best"):
 
 @torch.no_grad()
 def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str = "test",
-                 max_frames: int | None = None, device: str = "auto", collisions: bool = True) -> dict[str, Any]:
-    """Paper 000's tables on ``split`` (see the module docstring); JSON-able."""
+                 max_frames: int | None = None, device: str = "auto", collisions: bool = True,
+                 progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+    """Paper 000's tables on ``split`` (see the module docstring); JSON-able. ``progress(done,
+    total)`` is called with the frames evaluated after every batch."""
     from torch_geometric.loader import DataLoader
     from torch_geometric.utils import scatter
 
@@ -109,7 +111,14 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     rows: dict[str, dict[str, list]] = {}
     by_seen: dict[str, dict[str, dict[str, list]]] = {}
     inside_total, vertex_total = 0, 0
-    body_faces = store.body_model()["faces"] if collisions else None
+    # the posed body, refitted frame by frame on the evaluation's device (on a GPU host the CPU
+    # winding-number queries had been most of an evaluation's time)
+    body_mesh = None
+    if collisions:
+        from datagen.geometry.queries import MovingMesh
+
+        body_mesh = MovingMesh(store.body_model()["faces"],
+                          device=f"cuda:{torch.cuda.current_device()}" if dev.type == "cuda" else "cpu")
     t_model, n_frames = 0.0, 0
     # the run's DataLoader workers read and derive the frames (spawned: each opens the store itself)
     workers = int(meta["config"].get("workers", 0))
@@ -152,8 +161,11 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
             if collisions:
                 i, t = int(batch.sample[k]), int(batch.frame[k])
                 body_v = store.frames(i, t, names=["body_vertices"])["body_vertices"][0]
-                inside_total += _inside(detail[mask].cpu().numpy(), body_v, body_faces)
+                inside_total += body_mesh.pose(body_v).inside_count(detail[mask].cpu().numpy())
                 vertex_total += int(mask.sum())
+        if progress is not None:
+            progress(n_frames, len(ds))
+
     def summary(r: dict[str, list]) -> dict[str, float]:
         return {m: float(np.mean(v)) for m, v in r.items() if m != "frames"} | {"frames": len(r["frames"])}
 
@@ -187,14 +199,6 @@ def seen_in_training(store) -> dict[int, str]:
     poses = {mkey[m] for m in idx["motion"][train]}
     return {int(i): SEEN[((gtype[g], gseed[g]) in garments, mkey[m] in poses)]
             for i, (g, m) in enumerate(zip(idx["garment"], idx["motion"], strict=True))}
-
-
-def _inside(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray) -> int:
-    """How many ``points`` are inside the closed body mesh (warp's signed distance, negative inside)."""
-    from datagen.geometry.queries import mesh_signed_distance, warp_mesh
-
-    d = mesh_signed_distance(warp_mesh(body_vertices.astype(np.float32), body_faces), points.astype(np.float32), 1.0)
-    return int((d < 0).sum())
 
 
 def format_evaluation(e: dict[str, Any]) -> str:
