@@ -25,6 +25,8 @@
 #   NO_EVAL=1          train only (a later MORE=1 command evaluates)
 #   EVAL_RUNS="a b"    evaluate these runs on the test split (default: all; Figure 10 is always all)
 #   BENCH_AFTER=1      the inference benchmark (torch.compile rows) after the evaluations
+#   FULL_FRAMES=N      evaluate the full runs on N test frames drawn evenly (default: all 2,580)
+# The full runs' best weights come back as $OUT/run_full-s*.tgz (a run directory for `drape evaluate`).
 set -o pipefail
 OUT=${OUT:-/tmp/gnn-medium-out}; STORE=${STORE:-/tmp/medium.zarr}; RUNS=${RUNS:-/tmp/runs}
 BUDGET=${BUDGET:-570}; T0=$(date +%s); DEADLINE=$((T0 + BUDGET)); DEVICE=${DEVICE:-cuda}
@@ -109,7 +111,8 @@ pids=""
 for r in $RUNS_TO_EVAL; do
   IFS=: read -r name ablation seed gpu <<< "$r"
   [ -n "$EVAL_RUNS" ] && ! grep -qw -- "$name" <<< "$EVAL_RUNS" && continue
-  frames=""; [ "$ablation" = full ] || frames="--max-frames ${ABLATION_FRAMES:-860}"
+  frames=""; [ -n "$FULL_FRAMES" ] && frames="--max-frames $FULL_FRAMES"
+  [ "$ablation" = full ] || frames="--max-frames ${ABLATION_FRAMES:-860}"
   CUDA_VISIBLE_DEVICES=$gpu timeout "$left" python -m datagen.cli evaluate "$RUNS/$name" --data "$STORE" --split test \
     --json "$RUNS/$name/eval_test.json" --device "$DEVICE" $frames > "$OUT/eval_$name.log" 2>&1 & pids="$pids $!:$name"
 done
@@ -146,6 +149,26 @@ for row in csv.reader(open(sys.argv[1])):
 for gpu, u in sorted(use.items()):
     print(f"GPU {gpu}: {sum(u) / len(u):.0f} % utilisation on average over {len(u)} samples of the training")
 PY
-tar czf /tmp/medium_run.tgz --exclude='*.ckpt' --exclude='events.out.*' -C "$(dirname "$OUT")" "$(basename "$OUT")"
+# the full runs' best weights (no optimiser state: ~11 MB each), so that a run can be evaluated
+# again elsewhere, on the CPU too, when the host is gone (on 2026-11-27 the evaluations ran out of time
+# and the checkpoints went with the host)
+for name in full-s0 full-s1; do
+  [ -f "$RUNS/$name/checkpoints/best.ckpt" ] || continue
+  python - "$RUNS/$name" "$OUT/run_$name" <<'PY'
+import shutil, sys
+from pathlib import Path
+import torch
+run, out = Path(sys.argv[1]), Path(sys.argv[2])
+(out / "checkpoints").mkdir(parents=True, exist_ok=True)
+ckpt = torch.load(run / "checkpoints" / "best.ckpt", map_location="cpu", weights_only=False)
+torch.save({k: v for k, v in ckpt.items() if k not in ("optimizer_states", "lr_schedulers", "callbacks", "loops")},
+           out / "checkpoints" / "best.ckpt")
+for f in ("run.json", "train_summary.json"):
+    if (run / f).exists():
+        shutil.copy(run / f, out / f)
+PY
+  tar czf "$OUT/run_$name.tgz" -C "$OUT" "run_$name" && rm -rf "$OUT/run_$name"
+done
+tar czf /tmp/medium_run.tgz --exclude='*.ckpt' --exclude='run_*.tgz' --exclude='events.out.*' -C "$(dirname "$OUT")" "$(basename "$OUT")"
 mv /tmp/medium_run.tgz "$OUT/"
 ls -la "$OUT/medium_run.tgz"
