@@ -85,7 +85,10 @@ fi
 
 # 2. eight runs until the evaluations' share of the time
 [ -n "$NO_EVAL" ] && EVAL_SECONDS=0
-left=$(minutes_left $((DEADLINE - EVAL_SECONDS - BENCH_SECONDS_AFTER - 45)))  # each run's start and end are outside its limit
+# each run's start and end are outside its --max-minutes: 45 s was enough for two runs to a card,
+# not for four (on 2026-11-27 the first two-GPU command ran past the device's 600 s limit)
+START_END=${START_END:-45}; [ -n "$TWO_GPUS" ] && START_END=${START_END_TWO:-100}
+left=$(minutes_left $((DEADLINE - EVAL_SECONDS - BENCH_SECONDS_AFTER - START_END)))
 mode=--force
 if [ -n "$MORE" ]; then  # the limit counts the minutes trained before, so it grows by what is left
   mode=--resume; left=$(python -c "print(round($(cat "$RUNS/minutes.txt") + $left, 2))")
@@ -100,7 +103,15 @@ for r in $RUNLIST; do
     --config "$(config_of "$seed")" --ablation "$ablation" --device "$DEVICE" $mode \
     --max-minutes "$left" >> "$OUT/train_$name.log" 2>&1 & pids="$pids $!"
 done
+# a watchdog ends the runs (SIGTERM, then SIGKILL) if they outlast their share, so that the
+# evaluations and the packing of $OUT still happen; the checkpoints of finished epochs stay
+HARD=$((DEADLINE - EVAL_SECONDS - BENCH_SECONDS_AFTER - 20))
+( while [ "$(date +%s)" -lt "$HARD" ]; do sleep 2; done
+  echo "== watchdog: runs still going at their hard limit; stopping them" >> "$OUT/watchdog.txt"
+  kill -TERM $pids 2>/dev/null; sleep 15; kill -KILL $pids 2>/dev/null ) > /dev/null 2>&1 &
+WATCH=$!; disown $WATCH
 wait $pids
+pkill -P $WATCH 2>/dev/null; kill $WATCH 2>/dev/null
 TRAIN_END=$(date +%s)
 for r in $RUNLIST; do IFS=: read -r name _ <<< "$r"; echo "-- $name: $(tail -1 "$OUT/train_$name.log" | cut -c1-200)"; done
 
