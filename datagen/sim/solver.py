@@ -175,6 +175,13 @@ def _reduction_chunks(particle_range: np.ndarray, size: int) -> tuple[np.ndarray
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
+    sweep_trace: list[tuple] | None = None
+    """A convergence probe for benchmarks (None in production, and then free; set it on an instance,
+    or on the class for solvers built inside :func:`~datagen.sim.scene.simulate`): when a list, every
+    sweep appends (substep, sweep, every vertex's move in that sweep [n] in m, and on a substep's
+    last sweep which vertices touch the body and which have cloth-cloth contacts [n] bool, else
+    None, None), read back to the host after the sweep, which syncs the device once per sweep."""
+
     def __init__(self, model, config: SolverConfig | None = None):
         import warp as wp
 
@@ -530,6 +537,8 @@ class SolverVBD:
                 omega, cheb = 1.0, 0
                 rho = c.chebyshev_rho
                 for it in range(c.iterations):
+                    if self.sweep_trace is not None:
+                        before = x.numpy().copy()
                     if c.self_collision and c.detection_interval and it and it % c.detection_interval == 0:
                         wp.copy(self.x_det, x)
                         self._detect_self()
@@ -554,6 +563,11 @@ class SolverVBD:
                         omega = 1.0
                     wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
                                                       omega])
+                    if self.sweep_trace is not None:
+                        last = it == c.iterations - 1
+                        self.sweep_trace.append((s, it, np.linalg.norm(x.numpy() - before, axis=1),
+                                                 (self.body_has.numpy() > 0).any(1) if last else None,
+                                                 self.vt_count.numpy() > 0 if last else None))
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
                                                            self.body_radius, c.body_stiffness, self.body_lambda])
                 if c.global_iterations and c.global_friction == "lagged":
