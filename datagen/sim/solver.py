@@ -49,6 +49,9 @@ class SolverConfig:
         friction_velocity: velocity below which friction is smoothed (static) [m/s].
         contact_capacity: initial contacts stored per vertex, triangle and edge (grows on demand).
         chebyshev_rho: spectral radius estimate for Chebyshev acceleration of the sweeps (0: off).
+        chebyshev_contacts: whether the acceleration also extrapolates vertices that have cloth-cloth
+            (vertex-triangle) contacts; False leaves them at their sweep's result (a walking T-shirt's
+            sweeps then converge further; ``docs/simulator.md``, "How many sweeps").
         global_iterations: conjugate-gradient iterations of the global Newton step that starts every
             substep (:mod:`datagen.sim.newton_kernels`; 0: off, the sweeps alone). The sweeps carry
             a load one vertex per sweep; woven cloth needs it carried across the garment at once.
@@ -113,6 +116,7 @@ class SolverConfig:
     friction_velocity: float = 1.0e-3
     contact_capacity: int = 16
     chebyshev_rho: float = 0.7
+    chebyshev_contacts: bool = True
     detection_interval: int = 4
     body_projection: bool = True
     untangle_step: float = 0.002
@@ -562,7 +566,7 @@ class SolverVBD:
                         # velocities (a cloth at rest on a plane crept 80 mm in 2 s at 15 iterations)
                         omega = 1.0
                     wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
-                                                      omega])
+                                                      omega, self.vt_count, int(not c.chebyshev_contacts)])
                     if self.sweep_trace is not None:
                         last = it == c.iterations - 1
                         self.sweep_trace.append((s, it, np.linalg.norm(x.numpy() - before, axis=1),
