@@ -808,13 +808,20 @@ def copy_colour(colour_verts: wp.array(dtype=wp.int32), src: wp.array(dtype=wp.v
 @wp.kernel
 def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2: wp.array(dtype=wp.vec3),
               x_det: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
-              omega: float, contacts: wp.array(dtype=wp.int32), skip_contacts: int):
+              omega: float, contacts: wp.array(dtype=wp.int32), skip_contacts: int,
+              body_has: wp.array2d(dtype=wp.int32), skip_body: int):
     """Chebyshev semi-iterative acceleration of the sweeps (Wang 2015; VBD §3.5), bounded like the
     sweeps themselves; keeps the last two iterates. With ``skip_contacts``, a vertex with
-    cloth-cloth contacts (``contacts[i] > 0``) keeps its sweep's result."""
+    cloth-cloth contacts (``contacts[i] > 0``) keeps its sweep's result; with ``skip_body``, one
+    with a body contact (any ``body_has[i, part]``)."""
     i = wp.tid()
     xi = x[i]
-    if active[i] != 0 and omega != 1.0 and (skip_contacts == 0 or contacts[i] == 0):
+    accelerate = active[i] != 0 and omega != 1.0 and (skip_contacts == 0 or contacts[i] == 0)
+    if accelerate and skip_body != 0:
+        for j in range(body_has.shape[1]):
+            if body_has[i, j] != 0:
+                accelerate = False
+    if accelerate:
         xi = x_nm2[i] + (xi - x_nm2[i]) * omega
         move = xi - x_det[i]
         L = wp.length(move)

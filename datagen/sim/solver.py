@@ -52,6 +52,7 @@ class SolverConfig:
         chebyshev_contacts: whether the acceleration also extrapolates vertices that have cloth-cloth
             (vertex-triangle) contacts; False leaves them at their sweep's result (a walking T-shirt's
             sweeps then converge further; ``docs/simulator.md``, "How many sweeps").
+        chebyshev_body_contacts: the same for vertices in contact with the body.
         global_iterations: conjugate-gradient iterations of the global Newton step that starts every
             substep (:mod:`datagen.sim.newton_kernels`; 0: off, the sweeps alone). The sweeps carry
             a load one vertex per sweep; woven cloth needs it carried across the garment at once.
@@ -117,6 +118,7 @@ class SolverConfig:
     contact_capacity: int = 16
     chebyshev_rho: float = 0.7
     chebyshev_contacts: bool = True
+    chebyshev_body_contacts: bool = True
     detection_interval: int = 4
     body_projection: bool = True
     untangle_step: float = 0.002
@@ -566,7 +568,8 @@ class SolverVBD:
                         # velocities (a cloth at rest on a plane crept 80 mm in 2 s at 15 iterations)
                         omega = 1.0
                     wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
-                                                      omega, self.vt_count, int(not c.chebyshev_contacts)])
+                                                      omega, self.vt_count, int(not c.chebyshev_contacts),
+                                                      self.body_has, int(not c.chebyshev_body_contacts)])
                     if self.sweep_trace is not None:
                         last = it == c.iterations - 1
                         self.sweep_trace.append((s, it, np.linalg.norm(x.numpy() - before, axis=1),
