@@ -186,7 +186,8 @@ class SolverVBD:
     or on the class for solvers built inside :func:`~datagen.sim.scene.simulate`): when a list, every
     sweep appends (substep, sweep, every vertex's move in that sweep [n] in m, and on a substep's
     last sweep which vertices touch the body and which have cloth-cloth contacts [n] bool, else
-    None, None), read back to the host after the sweep, which syncs the device once per sweep."""
+    None, None), read back to the host after the sweep, which syncs the device once per sweep; a
+    traced step is launched directly, never from a captured CUDA graph."""
 
     def __init__(self, model, config: SolverConfig | None = None):
         import warp as wp
@@ -380,7 +381,8 @@ class SolverVBD:
         import warp as wp
 
         dev = wp.get_device(self.model.device)
-        if not (self.config.cuda_graph and dev.is_cuda):
+        # the sweep probe reads positions back inside the step, which a captured graph cannot do
+        if not (self.config.cuda_graph and dev.is_cuda) or self.sweep_trace is not None:
             self._step(state, control, dt)
             return self._needed()
         # a graph bakes in its arrays and constants: one per (state, control, dt, capacity)
