@@ -129,7 +129,10 @@ def _settings(items: list[str]) -> dict:
     return kw
 
 
-PHASES = {  # kernel (or native call) -> phase of a substep
+PHASES = {  # kernel (or native call) -> phase of a substep (the first key found in its name)
+    # the body meshes' refit with their winding-number data (before 2026-11-27 counted as detection)
+    "bvh_refit_with_solid_angle": "body: pose and refit",
+    "body_parts_moved": "body: projection", "add_travel": "body: projection",
     "interpolate_body": "body: pose and refit", "mesh_refit": "body: pose and refit",
     "detect_body": "body: contact query", "predict_body_friction": "body: contact query",
     "body_contact_force": "body: contact query", "project_out_of_body": "body: projection",

@@ -17,6 +17,39 @@ from datagen.errors import InputError, SimulationError
 log = logging.getLogger(__name__)
 
 
+TRAVEL_CHUNK = 256
+"""Body vertices per thread of ``kernels.body_parts_moved``'s reductions."""
+
+BIG_BOX = 1.0e30
+"""The empty bounding box's corners (+-) before ``kernels.body_parts_moved`` shrinks it onto a part."""
+
+
+def _part_vertices(body_faces: np.ndarray, face_part: np.ndarray, face_range: np.ndarray, parts: int):
+    """Every (scene, body part)'s vertices (those of its faces; a vertex on a border between parts
+    is in each), as one int32 list of global body vertex ids and offsets [S * parts + 1] indexed by
+    ``scene * parts + part``."""
+    lists = []
+    for f0, f1 in np.asarray(face_range).reshape(-1, 2):
+        faces, part = np.asarray(body_faces[f0:f1]), np.asarray(face_part[f0:f1])
+        for p in range(parts):
+            lists.append(np.unique(faces[part == p]).astype(np.int32))
+    offsets = np.zeros(len(lists) + 1, dtype=np.int32)
+    offsets[1:] = np.cumsum([len(x) for x in lists])
+    return (np.concatenate(lists) if lists else np.zeros(0, np.int32)), offsets
+
+
+def _reference_vertices(body_rest: np.ndarray, ranges: np.ndarray, scene_count: int) -> np.ndarray:
+    """Per scene the body vertex nearest its rest body's centroid (global index; -1 for a scene
+    without a body): the origin whose moves ``kernels.may_have_entered`` subtracts, so a body that
+    walks on moves its cloth's bound only by how its parts move about it."""
+    ref = np.full(scene_count, -1, dtype=np.int32)
+    for s, (b0, b1) in enumerate(np.asarray(ranges).reshape(-1, 2)[:scene_count]):
+        if b1 > b0:
+            pts = np.asarray(body_rest[b0:b1], dtype=np.float64)
+            ref[s] = b0 + int(np.argmin(np.linalg.norm(pts - pts.mean(0), axis=1)))
+    return ref
+
+
 @dataclass(frozen=True, kw_only=True)
 class SolverConfig:
     """Solver settings (SI units).
@@ -59,6 +92,10 @@ class SolverConfig:
         body_projection: at the end of every substep, move vertices that ended inside the body
             (winding-number test) out to its surface and take their inward velocity (see
             ``kernels.project_out_of_body``).
+        projection_skip: let the projection's inside test skip a vertex that provably cannot have
+            entered the body since its last test (its distance from the body then exceeds how far it
+            and the body have moved since; ``kernels.may_have_entered``). The result is the same as
+            testing every vertex (tested bitwise); off only to measure what it saves.
         projection_reach: how far the projection's search for a way out (where the closest face's
             normal does not lead outside) may move a vertex [m].
         untangle_step: how far a vertex of a crossing of the cloth with itself moves per untangling
@@ -123,6 +160,7 @@ class SolverConfig:
     body_projection: bool = True
     untangle_step: float = 0.002
     untangle_iterations: int = field(default=4, metadata={"min": 1, "max": 20})
+    projection_skip: bool = True
     projection_reach: float = 0.1
     body_friction: bool = True
     friction_pressure: float = 1000.0
@@ -266,6 +304,24 @@ class SolverVBD:
             self.needed = wp.zeros(3, dtype=wp.int32)
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
             self.projection_inside = wp.zeros(n, dtype=wp.int32)  # the projection's first pass found it inside
+            # what lets the projection's first pass skip a vertex that cannot have entered the body
+            # since its last test (kernels.may_have_entered): per scene a reference body vertex (the
+            # one nearest the rest body's centroid; -1 without a body), and per body part its
+            # vertices, its bounding box and its accumulated largest move relative to the reference;
+            # per cloth vertex where its last test found it outside and how far from each part
+            P = m.body_part_count
+            self.body_ref = wp.array(_reference_vertices(h.body_rest, h.body_ranges, m.scene_count), dtype=wp.int32)
+            part_vertices, part_offsets = _part_vertices(h.body_faces, h.body_face_part, h.body_face_range, P)
+            self.part_vertices = wp.array(part_vertices, dtype=wp.int32)
+            self.part_offsets = wp.array(part_offsets, dtype=wp.int32)
+            self._travel_chunks = max(1, -(-int(np.diff(part_offsets).max(initial=0)) // TRAVEL_CHUNK))
+            self.body_travel = wp.zeros((m.scene_count, P), dtype=float)
+            self.body_step_max = wp.zeros((m.scene_count, P), dtype=float)
+            self.part_lo, self.part_hi = (wp.zeros((m.scene_count, P), dtype=wp.vec3) for _ in range(2))
+            self.check_x, self.check_ref = z3(n), z3(n)
+            self.check_travel = wp.zeros((n, P), dtype=float)
+            self.check_bound = wp.zeros((n, P), dtype=float)  # [:, 0] 0: test at the next pass
+            self.projection_skipped = wp.zeros(n, dtype=wp.int32)  # skipped by the last first pass
             self.untangle_push = wp.zeros((n, 3), dtype=wp.int32)  # untangle_kernels.PUSH_SCALE units
             self.untangle_hits = wp.zeros(n, dtype=wp.int32)  # crossings each vertex is part of
             self.untangle_edges = wp.zeros(ne, dtype=wp.int32)  # edges that crossed at the first iteration
@@ -311,6 +367,12 @@ class SolverVBD:
     def reset_body(self, control) -> None:
         """Take ``control`` as the body's pose at the start of the next step (no motion in between)."""
         self.body_start.assign(control.body_vertices)
+        self._forget_checks()
+
+    def _forget_checks(self) -> None:
+        """The body jumped (or a step is redone from an earlier body): no vertex may skip the
+        projection's next inside test on what an earlier one found."""
+        self.check_bound.zero_()
 
     def place_body(self, control) -> None:
         """Put the body at ``control``'s pose now: the start of the next step and the collider that
@@ -370,6 +432,7 @@ class SolverVBD:
                      "the step is redone", self.capacity, need, self.model.scene_count, self.model.particle_count)
             for a, b in zip(lagged, self._lagged_saved):
                 wp.copy(a, b)
+            self._forget_checks()
             if state_out is state_in:
                 raise SimulationError("contact buffers overflowed in an in-place step; they have been grown: "
                                       "step with separate input and output states")
@@ -523,6 +586,14 @@ class SolverVBD:
                                                           self.body_prev_sub])
                 wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1, self.body_sub])
                 self._refit_body()
+                if c.body_projection and c.projection_skip:
+                    P = m.body_part_count
+                    self.part_lo.fill_(wp.vec3(BIG_BOX))
+                    self.part_hi.fill_(wp.vec3(-BIG_BOX))
+                    wp.launch(K.body_parts_moved, (m.scene_count * P, self._travel_chunks), inputs=[
+                        self.body_prev_sub, self.body_sub, self.part_vertices, self.part_offsets, self.body_ref, P,
+                        TRAVEL_CHUNK, self.body_step_max, self.part_lo, self.part_hi])
+                    wp.launch(K.add_travel, (m.scene_count, P), inputs=[self.body_step_max, self.body_travel])
                 wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
                                                      c.air_drag, h, self.x_prev, self.y, state.pinned_target])
                 wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, m.body_face_part,
@@ -588,4 +659,6 @@ class SolverVBD:
                         wp.launch(K.project_out_of_body, n, inputs=[
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
                             self.body_sub, 2.0 * c.body_query, self.body_radius, m.active, h, c.projection_reach, x, v,
-                            self.projected, again, self.projection_inside])
+                            self.projected, again, self.projection_inside, self.body_ref, m.body_part_count,
+                            self.body_travel, self.part_lo, self.part_hi, self.check_x, self.check_ref,
+                            self.check_travel, self.check_bound, self.projection_skipped, int(c.projection_skip)])
