@@ -247,7 +247,7 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
                         again: int, inside: wp.array(dtype=wp.int32), body_ref: wp.array(dtype=wp.int32),
                         parts: int, travel: wp.array2d(dtype=float), box_lo: wp.array2d(dtype=wp.vec3),
                         box_hi: wp.array2d(dtype=wp.vec3), check_x: wp.array(dtype=wp.vec3),
-                        check_ref: wp.array(dtype=wp.vec3), check_travel: wp.array2d(dtype=float),
+                        check_travel: wp.array2d(dtype=float),
                         check_bound: wp.array2d(dtype=float), skipped: wp.array(dtype=wp.int32), skip_tests: int):
     """Hard non-penetration at the end of a substep: a vertex inside the body (winding number, the
     same test as the penetration metric) moves to its closest body point plus half its contact
@@ -262,8 +262,9 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
     found them outside, and the body has not moved either, so it would find them outside again).
 
     The first pass skips a vertex that cannot have entered the body since its last test (see
-    :func:`may_have_entered`): ``check_*`` hold where that test found it outside and how far from
-    each body part (``check_bound`` 0: test it); ``skipped`` marks the vertices skipped this pass."""
+    :func:`may_have_entered`): ``check_*`` hold where that test found it outside (relative to the
+    scene's reference body vertex) and how far from each body part (``check_bound`` 0: test it);
+    ``skipped`` marks the vertices skipped this pass."""
     i = wp.tid()
     if again == 0:
         inside[i] = 0
@@ -277,7 +278,7 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
     if skip_tests == 0:
         ref = -1
     if again == 0 and ref >= 0:
-        moved = wp.length((x[i] - check_x[i]) - (body_now[ref] - check_ref[i]))
+        moved = wp.length((x[i] - body_now[ref]) - check_x[i])
         if not may_have_entered(i, s, parts, moved, travel, check_travel, check_bound):
             skipped[i] = 1
             return
@@ -288,8 +289,7 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
         return
     if q.sign >= 0.0:
         if ref >= 0:
-            check_x[i] = x[i]
-            check_ref[i] = body_now[ref]
+            check_x[i] = x[i] - body_now[ref]
             dist = wp.length(x[i] - wp.mesh_eval_position(mesh, q.face, q.u, q.v))
             for part in range(parts):
                 check_travel[i, part] = travel[s, part]

@@ -308,7 +308,8 @@ class SolverVBD:
             # since its last test (kernels.may_have_entered): per scene a reference body vertex (the
             # one nearest the rest body's centroid; -1 without a body), and per body part its
             # vertices, its bounding box and its accumulated largest move relative to the reference;
-            # per cloth vertex where its last test found it outside and how far from each part
+            # per cloth vertex where its last test found it outside (relative to the reference) and
+            # how far from each part
             P = m.body_part_count
             self.body_ref = wp.array(_reference_vertices(h.body_rest, h.body_ranges, m.scene_count), dtype=wp.int32)
             part_vertices, part_offsets = _part_vertices(h.body_faces, h.body_face_part, h.body_face_range, P)
@@ -318,7 +319,7 @@ class SolverVBD:
             self.body_travel = wp.zeros((m.scene_count, P), dtype=float)
             self.body_step_max = wp.zeros((m.scene_count, P), dtype=float)
             self.part_lo, self.part_hi = (wp.zeros((m.scene_count, P), dtype=wp.vec3) for _ in range(2))
-            self.check_x, self.check_ref = z3(n), z3(n)
+            self.check_x = z3(n)
             self.check_travel = wp.zeros((n, P), dtype=float)
             self.check_bound = wp.zeros((n, P), dtype=float)  # [:, 0] 0: test at the next pass
             self.projection_skipped = wp.zeros(n, dtype=wp.int32)  # skipped by the last first pass
@@ -660,5 +661,5 @@ class SolverVBD:
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
                             self.body_sub, 2.0 * c.body_query, self.body_radius, m.active, h, c.projection_reach, x, v,
                             self.projected, again, self.projection_inside, self.body_ref, m.body_part_count,
-                            self.body_travel, self.part_lo, self.part_hi, self.check_x, self.check_ref,
-                            self.check_travel, self.check_bound, self.projection_skipped, int(c.projection_skip)])
+                            self.body_travel, self.part_lo, self.part_hi, self.check_x, self.check_travel,
+                            self.check_bound, self.projection_skipped, int(c.projection_skip)])
