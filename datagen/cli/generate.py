@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import json
 import sys
-import time
 from pathlib import Path
 
 from datagen.errors import InputError
@@ -85,8 +84,7 @@ def _cmd_generate(args) -> int:
     if args.print_config:
         print(json.dumps(config.as_dict(), indent=2))
         return 0
-    from tqdm import tqdm
-
+    from datagen.cli.progress import reporter
     from datagen.generate.run import simulated_frames
 
     plan = Plan(config)
@@ -99,43 +97,24 @@ def _cmd_generate(args) -> int:
     print(f"each scene simulates {sim} frames: {ph['settle_rest']} settling in the rest pose, {ph['lead_in']} leading "
           f"into the motion's first pose, {ph['settle_pose']} holding it and {ph['ramp']} ramping into the motion, then "
           f"the {ph['recorded']} that are recorded", flush=True)
-    bars: dict = {}
-    tty = sys.stdout.isatty()
-    started: dict = {}
-
     side_by_side = args.executor == "ray" or "," in str(args.device)
+    # Ray's tasks, or several devices, run side by side: the frame bar follows the furthest; else a
+    # new batch restarts it
+    frame_bar = reporter("frames", "frame", follow_furthest=side_by_side)
+    scene_bar = reporter("scenes", "scene", follow_furthest=True)
 
     def progress(kind, done, total, batch):
-        key = "frames" if kind == 0 else "scenes"
-        desc = f"batch of {batch} scenes" if kind == 0 else "scenes"
-        unit = "frame" if kind == 0 else "scene"
-        if not tty:  # a log: one plain line (tqdm's figures: rate and time left) every 30 s and at the end
-            t0, last, seen = started.get(key, (None, 0.0, 0))
-            now = time.perf_counter()
-            if t0 is None or done < seen:  # a new batch counts from 0 again
-                t0, last = now, now
-            if done == total or now - last >= 30.0:
-                print(tqdm.format_meter(done, total, now - t0, prefix=desc, unit=unit), flush=True)
-                last = now
-            started[key] = (t0, last, done)
-            return
-        bar = bars.get(key)
-        # a new batch restarts the frame bar (Ray's tasks, or several devices, run side by side: the bar
-        # follows the furthest)
-        if bar is None or bar.total != total or (kind == 0 and done < bar.n and not side_by_side):
-            if bar is not None:
-                bar.close()
-            bar = bars[key] = tqdm(total=total, desc=desc, unit=unit, file=sys.stdout, mininterval=1.0,
-                                   dynamic_ncols=True)
-        if done > bar.n:
-            bar.update(done - bar.n)
+        if kind == 0:
+            frame_bar(done, total, desc=f"batch of {batch} scenes")
+        else:
+            scene_bar(done, total)
 
     try:
         summary = generate(config, args.out, executor=args.executor, device=args.device, workers=args.workers,
                            progress=progress, time_limit=args.time_limit)
     finally:
-        for bar in bars.values():
-            bar.close()
+        frame_bar.close()
+        scene_bar.close()
     if not summary["complete"]:
         print(f"time limit of {args.time_limit:g} min: simulated {summary['simulated']} scenes in "
               f"{summary['batches']} batch(es) ({summary['seconds']:.0f} s, the simulator "
