@@ -10,7 +10,7 @@ set -o pipefail
 OUT=${OUT:-/tmp/sweeps-out}; RUNS=${RUNS:-.simbench/runs.pkl}; NEWTON_RUNS=${NEWTON_RUNS:-.simbench/newton_runs.pkl}
 BATCHES=${BATCHES:-64}; FRAMES=${FRAMES:-60}
 mkdir -p "$OUT"
-filter() { grep -v "^Module\|^Warp\|^   \|CUDA Toolkit\|Devices:\|Kernel cache"; }
+filter() { grep --line-buffered -v "^Module\|^Warp\|^   \|CUDA Toolkit\|Devices:\|Kernel cache"; }
 six() {
   local name=$1; shift
   python benchmarks/bench_sim.py run-scenes --inputs "$RUNS" --device cuda "$@" 2>&1 | filter > "$OUT/six_$name.txt"
