@@ -150,7 +150,6 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
                                    dim_size=batch.num_graphs, reduce="mean").cpu().numpy()
         for k in range(batch.num_graphs):
             body = names[int(batch.body[k])]
-            mask = batch.batch == k
             means = dict(zip(errs, per_frame[k].tolist(), strict=True))
             category = seen[int(batch.sample[k])]
             for table, key in ((rows, body), (rows, "all"), (by_seen.setdefault(category, {}), body),
@@ -159,11 +158,16 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
                 for m, v in means.items():
                     r[m].append(v)
                 r["frames"].append(1)
-            if collisions:
-                i, t = int(batch.sample[k]), int(batch.frame[k])
-                body_v = store.frames(i, t, names=["body_vertices"])["body_vertices"][0]
-                inside_total += body_mesh.pose(body_v).inside_count(detail[mask].cpu().numpy())
-                vertex_total += int(mask.sum())
+        if collisions:  # one read (and derivation) of the posed bodies per sample, one copy of the batch
+            graph = batch.batch.cpu().numpy()
+            points = detail.cpu().numpy()
+            samples, frames = batch.sample.cpu().numpy(), batch.frame.cpu().numpy()
+            for i in np.unique(samples):
+                ks = np.flatnonzero(samples == i)
+                bodies = store.frames(int(i), frames[ks].tolist(), names=["body_vertices"])["body_vertices"]
+                for k, body_v in zip(ks, bodies, strict=True):
+                    inside_total += body_mesh.pose(body_v).inside_count(points[graph == k])
+                    vertex_total += int((graph == k).sum())
         if progress is not None:
             progress(n_frames, len(ds))
 
