@@ -1,0 +1,35 @@
+#!/bin/bash
+# Issue 25's speed figures and 23's one-GPU paper-motion, for one device session (three commands,
+# each under 10 minutes; figures and logs to $OUT):
+#   OUT=/tmp/o PHASE=profile bash benchmarks/sim_speed_gpu_run.sh   the profile at 64 and 256 scenes with
+#       the projection's skip on and off (the same run: the reference), then Newton's VBD beside drape
+#       at 64 scenes with self-collision on and off (needs .simbench/sim_inputs.npz and newton_runs.pkl,
+#       or SIM_INPUTS=... NEWTON_RUNS=...; newton installed)
+#   OUT=/tmp/o PHASE=paper-motion bash ...   `drape generate --preset paper-motion --batch-size 252` on one
+#       GPU under `time`, stopped at 585 s (run PHASE=profile first on the same machine: it compiles the
+#       kernels), with nvidia-smi sampled every 10 s
+#   OUT=/tmp/o PHASE=six bash ...   the six 300-frame runs at the production settings (RUNS=...)
+set -o pipefail
+OUT=${OUT:-/tmp/speed-out}; PHASE=${PHASE:-profile}
+SIM_INPUTS=${SIM_INPUTS:-.simbench/sim_inputs.npz}; NEWTON_RUNS=${NEWTON_RUNS:-.simbench/newton_runs.pkl}
+RUNS=${RUNS:-.simbench/runs.pkl}
+mkdir -p "$OUT"
+filter() { grep --line-buffered -v "^Module\|^Warp\|^   \|CUDA Toolkit\|Devices:\|Kernel cache"; }
+case "$PHASE" in
+profile)
+  for skip in true false; do
+    python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches 64,256 --self on \
+      --frames 3 --top 12 --set projection_skip=$skip 2>&1 | filter | tee "$OUT/profile_skip_$skip.txt" | grep -A12 "^=="
+  done
+  python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda --batches 64 \
+    --self on,off --frames 40 2>&1 | filter | tee "$OUT/newton_b64.txt" ;;
+paper-motion)
+  (nvidia-smi --query-gpu=timestamp,utilization.gpu,memory.used --format=csv -l 10 > "$OUT/smi.csv" &)
+  ( time timeout 585 python -m datagen.cli generate --preset paper-motion --batch-size 252 --out /tmp/pm.zarr \
+      --device cuda ) > "$OUT/generate_pm.log" 2>&1
+  echo "exit $?"; grep -v "^scene \|^Module\|^Warp" "$OUT/generate_pm.log" | tail -30 ;;
+six)
+  python benchmarks/bench_sim.py run-scenes --inputs "$RUNS" --device cuda 2>&1 | filter \
+    | grep --line-buffered -v "frame [0-9]*/" | tee "$OUT/six_runs.txt" ;;
+*) echo "PHASE must be profile, paper-motion or six" >&2; exit 2 ;;
+esac
