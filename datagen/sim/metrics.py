@@ -113,6 +113,41 @@ def _slip(x: wp.array(dtype=wp.vec3), body: wp.array(dtype=wp.vec3), anchor: wp.
     out[i] = wp.length(x[i] - body[anchor[i]]) - rest_distance[i]
 
 
+@wp.kernel
+def _face_stretch(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22d),
+                  out: wp.array(dtype=wp.float64)):
+    """Largest principal stretch minus one of every face (float64, +inf where not finite)."""
+    f = wp.tid()
+    x0 = wp.vec3d(x[faces[f, 0]])
+    e1 = wp.vec3d(x[faces[f, 1]]) - x0
+    e2 = wp.vec3d(x[faces[f, 2]]) - x0
+    d = dm_inv[f]
+    f0 = e1 * d[0, 0] + e2 * d[1, 0]
+    f1 = e1 * d[0, 1] + e2 * d[1, 1]
+    a = wp.dot(f0, f0)
+    b = wp.dot(f1, f1)
+    c = wp.dot(f0, f1)
+    t = wp.float64(0.5) * (a + b) + wp.sqrt(wp.float64(0.25) * (a - b) * (a - b) + c * c)
+    s = wp.float64(wp.inf)  # also where t is NaN, which wp.max would drop
+    if wp.isfinite(t):
+        s = wp.sqrt(wp.max(t, wp.float64(0.0))) - wp.float64(1.0)
+    out[f] = s
+
+
+@wp.kernel
+def _vertex_energy(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: wp.array(dtype=wp.float64),
+                   energy: wp.array(dtype=wp.float64), bad: wp.array(dtype=wp.int32)):
+    """Kinetic energy of every vertex (float64, +inf where not finite) and whether its position
+    is not finite."""
+    i = wp.tid()
+    vi = wp.vec3d(v[i])
+    e = wp.float64(0.5) * mass[i] * wp.dot(vi, vi)
+    if not wp.isfinite(e):
+        e = wp.float64(wp.inf)
+    energy[i] = e
+    bad[i] = int(not wp.isfinite(x[i]))
+
+
 def principal_strain(rest_vertices: np.ndarray, faces: np.ndarray, positions: np.ndarray) -> np.ndarray:
     """The largest principal strain of every triangle against its rest shape: the largest singular
     value of the deformation gradient F = Ds Dm⁻¹ minus one, [T, F] for ``positions`` [T, V, 3]
@@ -195,7 +230,17 @@ class Metrics:
             wp.launch(face_bounds, m.face_count, inputs=[m.rest_positions, m.faces, self._lo, self._hi])
             self._bvh = wp.Bvh(self._lo, self._hi, groups=wp.array(
                 h.particle_scene[h.faces[:, 0]].astype(np.int32), dtype=wp.int32))
+            # each frame's stretch and kinetic energy are computed here, in float64 like the host
+            # arrays they come from: only per-face and per-vertex scalars come back (on a GPU the
+            # host's numpy pass over a 252-scene batch took a few hundred ms a frame with the
+            # device idle)
+            self._dm_inv = wp.array(m.host.dm_inv.astype(np.float64), dtype=wp.mat22d)
+            self._mass = wp.array(m.host.mass.astype(np.float64), dtype=wp.float64)
+            self._stretch = wp.zeros(m.face_count, dtype=wp.float64)
+            self._energy = wp.zeros(m.particle_count, dtype=wp.float64)
+            self._bad = wp.zeros(m.particle_count, dtype=wp.int32)
         h = m.host
+        self._face_start, self._vertex_start = h.face_range[:, 0], h.particle_range[:, 0]
         self._scene = h.particle_scene
         self._face_scene = self._scene[h.faces[:, 0]]
         self._edge_scene = self._scene[h.edges[:, 0]]
@@ -233,35 +278,26 @@ class Metrics:
             wp.launch(crossings, m.edge_count, inputs=[self._bvh.id, x_wp, m.particle_scene, m.faces,
                                                        m.edge_pairs, self._cross, self._no_pairs])
             wp.launch(_slip, m.particle_count, inputs=[x_wp, solver.body_sub, self._anchor, self._rest_d, self._slip])
-        x = x_wp.numpy().astype(np.float64)
-        v = state.velocities.numpy().astype(np.float64)
+            wp.launch(_face_stretch, m.face_count, inputs=[x_wp, m.faces, self._dm_inv, self._stretch])
+            wp.launch(_vertex_energy, m.particle_count, inputs=[x_wp, state.velocities, self._mass, self._energy,
+                                                                self._bad])
         depth = self._depth.numpy()
-        F = h.faces
-        D = h.dm_inv
-        e1, e2 = x[F[:, 1]] - x[F[:, 0]], x[F[:, 2]] - x[F[:, 0]]
-        f0 = e1 * D[:, 0, 0, None] + e2 * D[:, 1, 0, None]
-        f1 = e1 * D[:, 0, 1, None] + e2 * D[:, 1, 1, None]
-        a, b, c = (f0 * f0).sum(1), (f1 * f1).sum(1), (f0 * f1).sum(1)
-        lam_max = np.sqrt(np.maximum(0.5 * (a + b) + np.sqrt(0.25 * (a - b) ** 2 + c * c), 0.0))
-        stretch = lam_max - 1.0
-        ke = 0.5 * h.mass * (v * v).sum(1)
-        bad = ~np.isfinite(x).all(1)
+        stretch = self._stretch.numpy()
         area = h.tri_area
         out = {
-            "stretch_max": np.full(S, -np.inf), "stretch_mean": np.zeros(S),
+            # every scene has faces, contiguous in scene order
+            "stretch_max": np.maximum.reduceat(stretch, self._face_start),
+            "stretch_mean": (np.bincount(self._face_scene, weights=stretch * area, minlength=S)
+                             / np.bincount(self._face_scene, weights=area, minlength=S)),
             "penetration_count": np.bincount(self._scene, weights=depth > 0, minlength=S).astype(np.int64),
-            "penetration_depth": np.zeros(S),
+            "penetration_depth": np.maximum.reduceat(depth, self._vertex_start).astype(np.float64),
             "self_intersections": np.bincount(self._edge_scene, weights=self._cross.numpy(), minlength=S).astype(
                 np.int64),
-            "kinetic_energy": np.bincount(self._scene, weights=np.nan_to_num(ke, nan=np.inf), minlength=S),
-            "nan": np.bincount(self._scene, weights=bad, minlength=S) > 0,
+            "kinetic_energy": np.bincount(self._scene, weights=self._energy.numpy(), minlength=S),
+            "nan": np.bincount(self._scene, weights=self._bad.numpy(), minlength=S) > 0,
             "slip": np.bincount(self._scene, weights=np.nan_to_num(self._slip.numpy(), nan=np.inf) * self._band,
                                 minlength=S) / np.maximum(self._band_count, 1),
         }
-        np.maximum.at(out["stretch_max"], self._face_scene, np.nan_to_num(stretch, nan=np.inf))
-        out["stretch_mean"] = (np.bincount(self._face_scene, weights=np.nan_to_num(stretch, nan=np.inf) * area,
-                                           minlength=S) / np.bincount(self._face_scene, weights=area, minlength=S))
-        np.maximum.at(out["penetration_depth"], self._scene, depth)
         return out
 
     def failure(self, frame: dict[str, np.ndarray], scene: int, thresholds: FailureThresholds) -> Failure | None:

@@ -359,7 +359,7 @@ class ClothModelBuilder:
             raise InputError("the model has no cloth: add a garment first")
         device = str(wp.get_device(device))
         g = self._gather()
-        topo = _topology(g.X, g.F)
+        topo = _parts_topology([(len(p.vertices), p.faces) for p in self._parts])
         membrane = _membrane(g)
         vertex = _vertex_materials(g)
         bending = _bending(g.X, topo.edges, g.materials, vertex.material)
@@ -524,11 +524,17 @@ def _scene_ranges(scene: np.ndarray, F: np.ndarray, E: np.ndarray,
 
 
 def _scene_colours(conflicts: np.ndarray, scene: np.ndarray, particle_range: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Colour every scene on its own (:func:`_colour`) and merge the colours by index."""
+    """Colour every scene on its own (:func:`_colour`, once per distinct conflict graph: a batch
+    repeats a few garments) and merge the colours by index."""
     colours: list[list[np.ndarray]] = []
+    bounds = np.searchsorted(scene[conflicts[:, 0]], np.arange(len(particle_range) + 1))  # conflicts are sorted
+    known: dict[tuple, list[np.ndarray]] = {}
     for s, (p0, p1) in enumerate(particle_range):
-        mine = conflicts[scene[conflicts[:, 0]] == s] - p0
-        for k, c in enumerate(_colour(int(p1 - p0), mine)):
+        mine = conflicts[bounds[s]:bounds[s + 1]] - p0
+        key = (int(p1 - p0), mine.tobytes())
+        if key not in known:
+            known[key] = _colour(int(p1 - p0), mine)
+        for k, c in enumerate(known[key]):
             if k == len(colours):
                 colours.append([])
             colours[k].append(c + p0)
@@ -633,6 +639,40 @@ def _topology(X: np.ndarray, F: np.ndarray) -> _Topology:
     conflicts = np.unique(np.sort(np.concatenate(pairs), axis=1), axis=0)
     return _Topology(edges=E, v2f_offsets=v2f_off, v2f=vf[:, 1:], v2e_offsets=v2e_off, v2e=ve[:, 1:],
                      nbr_offsets=nbr_off, nbr=nb[:, 1], conflicts=conflicts)
+
+
+def _parts_topology(parts: list[tuple[int, np.ndarray]]) -> _Topology:
+    """:func:`_topology` of cloth parts laid end to end ((vertex count, faces in local ids) each,
+    in the model's order), made once per distinct part and shifted: the same arrays as
+    :func:`_topology` of the concatenation (every part's vertices, faces and edges are contiguous
+    and sort before the next part's), in a fraction of the time for a batch that repeats a few
+    garments (13 s for 252 scenes of three garments on two cores)."""
+    known: dict[tuple, _Topology] = {}
+    pieces = []
+    for nv, faces in parts:
+        f = np.asarray(faces, dtype=np.int64)
+        key = (int(nv), f.tobytes())
+        if key not in known:
+            known[key] = _topology(np.zeros((int(nv), 3)), f)
+        pieces.append((int(nv), len(f), known[key]))
+    edges, v2f_off, v2f, v2e_off, v2e, nbr_off, nbr, conflicts = ([] for _ in range(8))
+    vb = fb = eb = 0  # vertices, faces and edges before the part
+    nf_, ne_, nn_ = 0, 0, 0  # incidence entries before the part
+    for nv, nf, t in pieces:
+        edges.append(np.where(t.edges >= 0, t.edges + vb, -1))
+        v2f_off.append(t.v2f_offsets[:-1] + nf_)
+        v2f.append(t.v2f + [fb, 0])
+        v2e_off.append(t.v2e_offsets[:-1] + ne_)
+        v2e.append(t.v2e + [eb, 0])
+        nbr_off.append(t.nbr_offsets[:-1] + nn_)
+        nbr.append(t.nbr + vb)
+        conflicts.append(t.conflicts + vb)
+        vb, fb, eb = vb + nv, fb + nf, eb + len(t.edges)
+        nf_, ne_, nn_ = nf_ + len(t.v2f), ne_ + len(t.v2e), nn_ + len(t.nbr)
+    return _Topology(edges=np.concatenate(edges), v2f_offsets=np.concatenate(v2f_off + [[nf_]]),
+                     v2f=np.concatenate(v2f), v2e_offsets=np.concatenate(v2e_off + [[ne_]]), v2e=np.concatenate(v2e),
+                     nbr_offsets=np.concatenate(nbr_off + [[nn_]]), nbr=np.concatenate(nbr),
+                     conflicts=np.concatenate(conflicts))
 
 
 def _colour(n: int, conflicts: np.ndarray) -> list[np.ndarray]:
