@@ -4,7 +4,7 @@
 #   OUT=/tmp/o PHASE=profile bash benchmarks/sim_speed_gpu_run.sh   the profile at 64 and 256 scenes with
 #       the projection's skip on and off (the same run: the reference), then Newton's VBD beside drape
 #       at 64 scenes with self-collision on and off (needs .simbench/sim_inputs.npz and newton_runs.pkl,
-#       or SIM_INPUTS=... NEWTON_RUNS=...; newton installed)
+#       or SIM_INPUTS=... NEWTON_RUNS=...; newton installed; NEWTON=0 leaves Newton out)
 #   OUT=/tmp/o PHASE=paper-motion bash ...   `drape generate --preset paper-motion --batch-size 252` on one
 #       GPU under `time`, stopped at 585 s (run PHASE=profile first on the same machine: it compiles the
 #       kernels), with nvidia-smi sampled every 10 s
@@ -21,13 +21,14 @@ profile)
     python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches 64,256 --self on \
       --frames 3 --top 12 --set projection_skip=$skip 2>&1 | filter | tee "$OUT/profile_skip_$skip.txt" | grep -A12 "^=="
   done
-  python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda --batches 64 \
-    --self on,off --frames 40 2>&1 | filter | tee "$OUT/newton_b64.txt" ;;
+  [ "${NEWTON:-1}" = 1 ] && python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk \
+    --device cuda --batches 64 --self on,off --frames 40 2>&1 | filter | tee "$OUT/newton_b64.txt" ;;
 paper-motion)
   (nvidia-smi --query-gpu=timestamp,utilization.gpu,memory.used --format=csv -l 10 > "$OUT/smi.csv" &)
   ( time timeout 585 python -m datagen.cli generate --preset paper-motion --batch-size 252 --out /tmp/pm.zarr \
       --device cuda ) > "$OUT/generate_pm.log" 2>&1
-  echo "exit $?"; grep -v "^scene \|^Module\|^Warp" "$OUT/generate_pm.log" | tail -30 ;;
+  echo "exit $?"; grep -v "^scene \|^Module\|^Warp" "$OUT/generate_pm.log" | tail -30
+  grep "set-up of" "$OUT/generate_pm.log" ;;
 six)
   python benchmarks/bench_sim.py run-scenes --inputs "$RUNS" --device cuda 2>&1 | filter \
     | grep --line-buffered -v "frame [0-9]*/" | tee "$OUT/six_runs.txt" ;;
