@@ -22,7 +22,15 @@ def sphere():
     return np.asarray(s.vertices, dtype=np.float64), np.asarray(s.faces, dtype=np.int64)
 
 
-def _run(sphere, skip: bool, frames: int = 12):
+def _devices():
+    import warp as wp
+
+    cuda = pytest.param("cuda", marks=pytest.mark.skipif(
+        wp.get_cuda_device_count() == 0, reason="needs a CUDA device: its float atomics and graphs run only there"))
+    return ["cpu", cuda]
+
+
+def _run(sphere, skip: bool, frames: int = 12, device: str = "cpu"):
     """A 40 cm cotton square hanging still (no gravity) while a sphere flies up through it at
     3 m/s and swings sideways: vertices near the sphere are pushed in every substep and projected
     out, the rest of the square is far from it. Returns per frame the positions, the vertices
@@ -32,7 +40,7 @@ def _run(sphere, skip: bool, frames: int = 12):
     b.add_cloth(v, f, material_name="cotton")
     sv, sf = sphere
     b.add_body(sv + [0.0, -0.3, 0.0], sf)
-    model = b.finalize("cpu")
+    model = b.finalize(device)
     config = SolverConfig(gravity=(0.0, 0.0, 0.0), body_stiffness=1.0e-4, projection_skip=skip)
     solver = SolverVBD(model, config)
     s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
@@ -47,12 +55,13 @@ def _run(sphere, skip: bool, frames: int = 12):
     return out
 
 
-def test_skipping_the_inside_test_changes_nothing(sphere):
+@pytest.mark.parametrize("device", _devices())
+def test_skipping_the_inside_test_changes_nothing(sphere, device):
     """With the skip and without: the same positions bitwise in every frame, while the projection
     moved vertices in some frames and, in some frame's last substep, the skip left more than a
     quarter of the square untested (the frames with the sphere beyond the 6 cm query distance test
     every vertex: that test finds no face and is cheap)."""
-    with_skip, without = _run(sphere, True), _run(sphere, False)
+    with_skip, without = _run(sphere, True, device=device), _run(sphere, False, device=device)
     projected = [p for _, p, _ in with_skip]
     skipped = [s for _, _, s in with_skip]
     n = len(with_skip[0][0])
