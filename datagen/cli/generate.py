@@ -30,7 +30,7 @@ def register(sub, formatter) -> None:
     p.add_argument("--executor", default="local", choices=("local", "ray"))
     p.add_argument("--workers", type=int, default=None,
                    help="local: processes that build garments, compute targets and stage while the simulator runs "
-                        "(default: cores - 1, at most 8; 0: none); ray: CPUs of the local Ray cluster (default: every core; "
+                        "(default: cores - 1, at most 16; 0: none); ray: CPUs of the local Ray cluster (default: every core; "
                         "one task per GPU with --device cuda, else one per CPU)")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N); local executor: several as a "
                    "comma list (cuda:0,cuda:1,...), one simulating process per device, each a share of the scenes")

@@ -20,6 +20,7 @@ the run resumes with the missing ones; a store made from another config is refus
 from __future__ import annotations
 
 import logging
+import os
 import shutil
 import time
 from pathlib import Path
@@ -79,9 +80,13 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
             cluster.close()
 
 
-BODY_BYTES_PER_VERTEX_FRAME = 48
-"""Host memory of one posed body vertex in one simulated frame while a batch is set up: the posed
-body frames in float64 and their float32 upload (3 x 8 + 3 x 8 bytes)."""
+BODY_BYTES_PER_VERTEX_FRAME = 12
+"""Host memory of one posed body vertex in one simulated frame, kept for a batch (float32 3-vectors):
+a batch poses each distinct (body, motion) once and its scenes share the frames."""
+
+POSING_BYTES_PER_VERTEX_FRAME = 96
+"""Host memory one posing takes while it runs, per body vertex and frame: float64 vertices and the
+skinning's temporaries (four [3] float64 arrays); up to 16 posings run at once on the host."""
 
 DISK_BYTES_PER_VERTEX_FRAME = 36
 """Disk one recorded garment vertex-frame takes at the peak of a run: staged uncompressed (two int32
@@ -128,7 +133,9 @@ def preflight(plan, out: str | Path, *, executor: str, device: str | None, worke
     batch = min(c.simulation.batch_size, -(-plan.sample_count // procs))
     frames = simulated_frames(plan)
     body_vertices = int(plan.body_model.v_template.shape[0])
-    need = procs * batch * frames * body_vertices * BODY_BYTES_PER_VERTEX_FRAME
+    posings = min(batch, len({(sc.body, sc.motion) for sc in plan.scenes}))  # distinct bodies in motion
+    need = procs * frames * body_vertices * (posings * BODY_BYTES_PER_VERTEX_FRAME
+                                             + min(16, posings, os.cpu_count() or 1) * POSING_BYTES_PER_VERTEX_FRAME)
     from datagen.sim.scene import available_ram
 
     free = available_ram()

@@ -119,7 +119,7 @@ def test_batch_poses_each_body_motion_once_and_gives_each_scene_its_own_arrays(s
     scenes = [sc.Scene(garment=garment, body=small_model, betas=betas, motion=m) for m in (walk, wave, walk)]
     calls = []
     real = sc._posed_body
-    monkeypatch.setattr(sc, "_posed_body", lambda s, lead_in: calls.append(id(s.motion)) or real(s, lead_in))
+    monkeypatch.setattr(sc, "_posed_body", lambda s, lead_in, *a: calls.append(id(s.motion)) or real(s, lead_in, *a))
     batch = sc.batch_arrays(scenes, 0.2)
     assert sorted(calls) == sorted([id(walk), id(wave)])
     for s, a in zip(scenes, batch, strict=True):
@@ -129,3 +129,23 @@ def test_batch_poses_each_body_motion_once_and_gives_each_scene_its_own_arrays(s
             if isinstance(x, np.ndarray):
                 np.testing.assert_array_equal(x, y, err_msg=f.name)
     assert not np.array_equal(batch[0].body_frames, batch[1].body_frames)
+
+
+def test_posing_with_the_torch_body_agrees_with_numpy(small_model):
+    """The float64 torch posing that a CUDA batch uses (here on the CPU) gives the numpy posing's
+    float32 body frames to an ulp, the same lead-in shift and the same face parts."""
+    import torch
+
+    from datagen.motion.library import make_motion
+
+    betas = np.linspace(-1.0, 1.0, 10)
+    walk = make_motion("walk", seed=3, frames=20, fps=30.0)
+    garment = type("G", (), {})()
+    scene = sc.Scene(garment=garment, body=small_model, betas=betas, motion=walk)
+    a = sc._posed_body(scene, 0.2)
+    b = sc._posed_body(scene, 0.2, small_model.torch(dtype=torch.float64, device="cpu"))
+    assert a[1] == b[1] and a[2].dtype == b[2].dtype == np.float32 and a[2].shape == b[2].shape
+    np.testing.assert_allclose(b[2], a[2], rtol=0, atol=4e-7)  # metres: a float32 ulp at 2-4 m
+    np.testing.assert_allclose(b[3], a[3], rtol=0, atol=1e-12)
+    np.testing.assert_array_equal(b[4], a[4])
+    assert not sc._torch_cuda("cpu") and not sc._torch_cuda(None)
