@@ -285,3 +285,19 @@ def test_chunked_point_queries_match_the_direct_ones(monkeypatch):
     assert torch.equal(tm.nearest(a, b), d.argmin(dim=2))
     direct = torch.maximum(d.min(dim=2).values.max(dim=1).values, d.min(dim=1).values.max(dim=1).values)
     assert torch.allclose(tm.hausdorff(a, b), direct)
+
+
+def test_training_attention_keeps_cuda_on_the_math_kernel():
+    """On CUDA the teacher-forced step enables only SDPA's math kernel (the memory-efficient one's
+    backward can give NaN gradients from a finite loss); on the CPU nothing is changed."""
+    import torch
+
+    from training.garment.model import training_attention
+
+    before = (torch.backends.cuda.mem_efficient_sdp_enabled(), torch.backends.cuda.flash_sdp_enabled())
+    with training_attention("cpu"):
+        assert (torch.backends.cuda.mem_efficient_sdp_enabled(), torch.backends.cuda.flash_sdp_enabled()) == before
+    with training_attention("cuda:0"):
+        assert torch.backends.cuda.math_sdp_enabled()
+        assert not torch.backends.cuda.mem_efficient_sdp_enabled() and not torch.backends.cuda.flash_sdp_enabled()
+    assert (torch.backends.cuda.mem_efficient_sdp_enabled(), torch.backends.cuda.flash_sdp_enabled()) == before

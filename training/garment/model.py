@@ -15,12 +15,27 @@
 
 from __future__ import annotations
 
+import contextlib
+
 import torch
 from torch import nn
 
 from training.motion.model import FRAME_FEATURES, sinusoidal_positions
 
 BOS_KINDS = ("learned", "zero")
+
+
+def training_attention(device: torch.device | str):
+    """The attention kernels a training step may use on ``device``: on CUDA only the math kernel
+    (sequences of 61 frames make its attention matrices tiny; the memory-efficient kernel's
+    backward is known to return NaN gradients now and then, pytorch/pytorch#125674 and #178251);
+    elsewhere whatever PyTorch picks. Greedy decoding runs without gradients and keeps the fast
+    kernels."""
+    if torch.device(device).type != "cuda":
+        return contextlib.nullcontext()
+    from torch.nn.attention import SDPBackend, sdpa_kernel
+
+    return sdpa_kernel([SDPBackend.MATH])
 
 
 class GarmentRegressor(nn.Module):
@@ -59,10 +74,15 @@ class GarmentRegressor(nn.Module):
         return self.garment_out(self.garment_decoder(h, memory, tgt_mask=mask, tgt_is_causal=True))
 
     def forward(self, poses: torch.Tensor, garment: torch.Tensor) -> torch.Tensor:
-        """Teacher forcing: frames [B, T, V*3] predicted from the poses and the true previous frames."""
-        memory = self.encode(poses)
-        inputs = torch.cat([self.bos_frame(poses)[:, None], garment[:, :-1]], dim=1)
-        return self._decode(inputs, memory)
+        """Teacher forcing: frames [B, T, V*3] predicted from the poses and the true previous frames.
+
+        On CUDA its attention runs on PyTorch's plain (math) kernel (:func:`training_attention`):
+        the memory-efficient kernel's backward can return NaN gradients from a finite loss
+        (pytorch/pytorch#125674, #178251), the regressor's sudden NaN at Adam 1e-3."""
+        with training_attention(poses.device):
+            memory = self.encode(poses)
+            inputs = torch.cat([self.bos_frame(poses)[:, None], garment[:, :-1]], dim=1)
+            return self._decode(inputs, memory)
 
     @torch.no_grad()
     def generate(self, poses: torch.Tensor, graph: bool = False) -> torch.Tensor:
