@@ -1,4 +1,5 @@
-"""The simulator's measures (``datagen.sim.metrics``, on the host and per frame on the device) against their definitions."""
+"""The simulator's measures (``datagen.sim.metrics``: on the host, and per frame on the device)
+against their definitions."""
 
 from __future__ import annotations
 
