@@ -308,7 +308,8 @@ def batch_arrays(scenes: list, lead_in: float, device: str | None = None) -> lis
     else:
         from threadpoolctl import threadpool_limits
 
-        with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(max(1, min(16, os.cpu_count() or 1))) as pool:
+        threads = max(1, min(16, os.cpu_count() or 1))
+        with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(threads) as pool:
             posed = dict(zip(todo, pool.map(lambda sc: _posed_body(sc, lead_in), todo.values()), strict=True))
     return [s if k is None else scene_arrays(s, lead_in, posed[k]) for s, k in zip(scenes, keys, strict=True)]
 
