@@ -305,6 +305,8 @@ def batch_arrays(scenes: list, lead_in: float, device: str | None = None) -> lis
             if id(sc.body) not in modules:
                 modules[id(sc.body)] = sc.body.torch(dtype=torch.float64, device=device)
             posed[k] = _posed_body(sc, lead_in, modules[id(sc.body)])
+        del modules
+        torch.cuda.empty_cache()  # give torch's cached blocks back before warp sizes the batch on free memory
     else:
         from threadpoolctl import threadpool_limits
 
