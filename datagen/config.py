@@ -39,7 +39,7 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
             import yaml
 
             with path.open("r", encoding="utf-8") as fh:
-                data = yaml.safe_load(fh)
+                data = yaml.load(fh, Loader=_yaml_loader())  # noqa: S506 (a SafeLoader)
         else:
             raise ConfigError(f"config file {path} has suffix '{suffix}'; use .toml, .yaml, .yml or .json")
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
@@ -53,6 +53,27 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
     if not isinstance(data, dict):
         raise ConfigError(f"config file {path} must hold a table/mapping at the top level, not {type(data).__name__}")
     return data
+
+
+def _yaml_loader():
+    """PyYAML's SafeLoader that also reads ``3e-4`` and ``1e3`` as numbers, as YAML 1.2 and TOML
+    do (YAML 1.1 wants a dot in a float, so ``lr: 3e-4`` was the string '3e-4')."""
+    import re
+
+    import yaml
+
+    global _YAML_LOADER
+    if _YAML_LOADER is None:
+        class Loader(yaml.SafeLoader):
+            pass
+
+        Loader.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(
+            r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"), list("-+0123456789"))
+        _YAML_LOADER = Loader
+    return _YAML_LOADER
+
+
+_YAML_LOADER = None
 
 
 def parse_assignments(items: typing.Iterable[str], option: str = "--set") -> dict[str, Any]:

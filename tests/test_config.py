@@ -32,6 +32,18 @@ def test_toml_and_yaml_load_the_same(tmp_path):
     assert a == b == Example(iterations=5, rest_pose="a-pose", inner=Inner(thickness=0.01))
 
 
+def test_yaml_reads_exponents_without_a_dot_as_numbers(tmp_path):
+    """``3e-4`` is a number in TOML and YAML 1.2; PyYAML (YAML 1.1) made it the string '3e-4',
+    which the strict loader then refused. Strings that only look like it stay strings."""
+    from datagen.config import read_config_file
+
+    a = load_config(Example, write(tmp_path, "a.yaml", "inner:\n  thickness: 3e-3\nsizes: [1e-1, 2.5E+0]\n"))
+    b = load_config(Example, write(tmp_path, "b.toml", "sizes = [1e-1, 2.5E+0]\n[inner]\nthickness = 3e-3\n"))
+    assert a == b == Example(inner=Inner(thickness=0.003), sizes=(0.1, 2.5))
+    raw = read_config_file(write(tmp_path, "c.yaml", "x: -1e3\ny: '3e-4'\nz: tshirt:0\nw: 1.5e-2\nv: 7\n"))
+    assert raw == {"x": -1000.0, "y": "3e-4", "z": "tshirt:0", "w": 0.015, "v": 7}
+
+
 def test_unknown_key_names_key_file_and_allowed(tmp_path):
     p = write(tmp_path, "c.toml", "iteration = 5\n")
     with pytest.raises(ConfigError) as e:
