@@ -1,7 +1,8 @@
 #!/bin/bash
 # Paper 001 on one GPU in phases that each fit one 10-minute command; figures and logs go to $OUT.
 #   OUT=/tmp/o PHASE=gen LIMIT=8.5 bash benchmarks/paper_motion_gpu_run.sh   the paper-motion store
-#       (`drape generate --time-limit`: repeat the call until it says the store is complete)
+#       (`drape generate --time-limit`: repeat the call until it says the store is complete; BATCH=252:
+#       the whole preset in one batch, one command on one H100 or H200 with the kernels compiled before)
 #   OUT=/tmp/o PHASE=train bash ...   the motion generator at λ_KL = 1e-5 (the paper's), 1e-4 and 1e-3
 #       (motion_lr3e-4 in MOTIONS: at 3x the paper's rate),
 #       and without the vertex loss (Table 8), and the garment regressor per template (skirt, tshirt,
@@ -29,7 +30,7 @@ quiet() { grep -v "^Module\|^Warp\|^   \|^ *\"cuda\|^ *\"cpu\|CUDA Toolkit\|Devi
 case "$PHASE" in
 gen)
   n=$(ls "$OUT"/generate_*.log 2>/dev/null | wc -l)
-  $D generate $SOURCE --out "$STORE" --device $DEV --time-limit "$LIMIT" > "$OUT/generate_$n.log" 2>&1
+  $D generate $SOURCE --out "$STORE" --device $DEV --time-limit "$LIMIT" ${BATCH:+--batch-size $BATCH} > "$OUT/generate_$n.log" 2>&1
   rc=$?; echo "generate exit $rc"; quiet "$OUT/generate_$n.log" | grep -v "^scene \|it/s\]$" | tail -30
   if [ $rc -eq 0 ]; then
     $D info "$STORE" > "$OUT/info.txt" 2>&1; $D validate "$STORE" > "$OUT/validate.txt" 2>&1; echo "validate exit $?"
