@@ -24,18 +24,23 @@ BIG_BOX = 1.0e30
 """The empty bounding box's corners (+-) before ``kernels.body_parts_moved`` shrinks it onto a part."""
 
 
-def _part_vertices(body_faces: np.ndarray, face_part: np.ndarray, face_range: np.ndarray, parts: int):
+def _part_vertices(body_faces: np.ndarray, face_part: np.ndarray, face_range: np.ndarray, body_ranges: np.ndarray,
+                   parts: int):
     """Every (scene, body part)'s vertices (those of its faces; a vertex on a border between parts
     is in each), as one int32 list of global body vertex ids and offsets [S * parts + 1] indexed by
-    ``scene * parts + part``."""
-    lists = []
-    for f0, f1 in np.asarray(face_range).reshape(-1, 2):
-        faces, part = np.asarray(body_faces[f0:f1]), np.asarray(face_part[f0:f1])
-        for p in range(parts):
-            lists.append(np.unique(faces[part == p]).astype(np.int32))
+    ``scene * parts + part``; made once per distinct body (a batch repeats one body for many
+    garments) and shifted to each scene's vertex range."""
+    lists, known = [], {}
+    for (f0, f1), (b0, _b1) in zip(np.asarray(face_range).reshape(-1, 2), np.asarray(body_ranges).reshape(-1, 2),
+                                   strict=True):
+        local, part = np.asarray(body_faces[f0:f1]) - b0, np.asarray(face_part[f0:f1])
+        key = (local.tobytes(), part.tobytes())
+        if key not in known:
+            known[key] = [np.unique(local[part == p]) for p in range(parts)]
+        lists.extend(x + b0 for x in known[key])
     offsets = np.zeros(len(lists) + 1, dtype=np.int32)
     offsets[1:] = np.cumsum([len(x) for x in lists])
-    return (np.concatenate(lists) if lists else np.zeros(0, np.int32)), offsets
+    return (np.concatenate(lists).astype(np.int32) if lists else np.zeros(0, np.int32)), offsets
 
 
 def _reference_vertices(body_rest: np.ndarray, ranges: np.ndarray, scene_count: int) -> np.ndarray:
@@ -312,7 +317,8 @@ class SolverVBD:
             # how far from each part
             P = m.body_part_count
             self.body_ref = wp.array(_reference_vertices(h.body_rest, h.body_ranges, m.scene_count), dtype=wp.int32)
-            part_vertices, part_offsets = _part_vertices(h.body_faces, h.body_face_part, h.body_face_range, P)
+            part_vertices, part_offsets = _part_vertices(h.body_faces, h.body_face_part, h.body_face_range,
+                                                        h.body_ranges, P)
             self.part_vertices = wp.array(part_vertices, dtype=wp.int32)
             self.part_offsets = wp.array(part_offsets, dtype=wp.int32)
             self._travel_chunks = max(1, -(-int(np.diff(part_offsets).max(initial=0)) // TRAVEL_CHUNK))

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from datagen.sim.model import ClothModelBuilder
-from datagen.sim.solver import SolverConfig, SolverVBD, _reference_vertices
+from datagen.sim.solver import SolverConfig, SolverVBD, _part_vertices, _reference_vertices
 from datagen.sim.state import BodyControl, ClothState
 from tests.sim.meshes import grid
 
@@ -78,3 +78,22 @@ def test_reference_vertex_is_the_one_nearest_the_centroid():
     rest = np.array([[0, 0, 0], [2, 0, 0], [1, 0.1, 0], [5, 5, 5], [5, 5, 6], [5, 5, 5.4]], dtype=float)
     ref = _reference_vertices(rest, np.array([[0, 3], [3, 6], [6, 6]]), 3)
     assert ref.tolist() == [2, 5, -1]
+
+
+def test_part_vertices_made_once_per_body_are_each_scenes_own(sphere):
+    """Three scenes, two of them the same sphere split into two parts, one a sphere split otherwise:
+    each (scene, part)'s list is the sorted set of that scene's part's face corners."""
+    sv, sf = sphere
+    halves = (sv[sf].mean(1)[:, 0] > 0).astype(np.int32)
+    thirds = np.minimum((np.arange(len(sf)) * 3) // len(sf), 1).astype(np.int32)
+    b = ClothModelBuilder()
+    for s, parts in enumerate((halves, thirds, halves)):
+        b.add_cloth(*grid(3, 3, 0.01), scene=s)
+        b.add_body(sv, sf, scene=s, face_part=parts)
+    h = b.finalize("cpu").host
+    got, offsets = _part_vertices(h.body_faces, h.body_face_part, h.body_face_range, h.body_ranges, 2)
+    assert got.dtype == np.int32 and len(offsets) == 3 * 2 + 1
+    for s, (f0, f1) in enumerate(h.body_face_range):
+        for p in range(2):
+            want = np.unique(h.body_faces[f0:f1][h.body_face_part[f0:f1] == p])
+            assert np.array_equal(got[offsets[2 * s + p]:offsets[2 * s + p + 1]], want)
