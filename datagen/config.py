@@ -12,6 +12,8 @@ itself. Range and choice limits go in the field's metadata::
 
 from __future__ import annotations
 
+import functools
+
 import dataclasses
 import math
 import tomllib
@@ -55,6 +57,7 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
     return data
 
 
+@functools.cache
 def _yaml_loader():
     """PyYAML's SafeLoader that also reads ``3e-4`` and ``1e3`` as numbers, as YAML 1.2 and TOML
     do (YAML 1.1 wants a dot in a float, so ``lr: 3e-4`` was the string '3e-4')."""
@@ -62,18 +65,12 @@ def _yaml_loader():
 
     import yaml
 
-    global _YAML_LOADER
-    if _YAML_LOADER is None:
-        class Loader(yaml.SafeLoader):
-            pass
+    class Loader(yaml.SafeLoader):
+        pass
 
-        Loader.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(
-            r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"), list("-+0123456789"))
-        _YAML_LOADER = Loader
-    return _YAML_LOADER
-
-
-_YAML_LOADER = None
+    Loader.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(
+        r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"), list("-+0123456789"))
+    return Loader
 
 
 def parse_assignments(items: typing.Iterable[str], option: str = "--set") -> dict[str, Any]:

@@ -254,11 +254,15 @@ class Metrics:
         X = h.rest_positions
         anchor, rest_d = np.zeros(len(X), dtype=np.int32), np.zeros(len(X))
         self._band = np.zeros(len(X), dtype=bool)
+        known = {}  # a batch repeats a few (garment, body) pairs: one tree and query per distinct pair
         for s, (p0, p1) in enumerate(h.particle_range):
             if s in m.scenes_without_body:
                 continue  # no body to slip off (its slip is 0)
             b0, b1 = h.body_ranges[s]
-            rest_d[p0:p1], a = cKDTree(h.body_rest[b0:b1]).query(X[p0:p1])
+            key = (X[p0:p1].tobytes(), h.body_rest[b0:b1].tobytes())
+            if key not in known:
+                known[key] = cKDTree(h.body_rest[b0:b1]).query(X[p0:p1])
+            rest_d[p0:p1], a = known[key]
             anchor[p0:p1] = a + b0
             self._band[p0:p1] = X[p0:p1, 1] > X[p0:p1, 1].max() - SLIP_BAND
         self._band_count = np.bincount(self._scene, weights=self._band, minlength=m.scene_count)
