@@ -12,9 +12,8 @@ itself. Range and choice limits go in the field's metadata::
 
 from __future__ import annotations
 
-import functools
-
 import dataclasses
+import functools
 import math
 import tomllib
 import types
