@@ -33,7 +33,7 @@ BUDGET=${BUDGET:-570}; T0=$(date +%s); DEADLINE=$((T0 + BUDGET)); DEVICE=${DEVIC
 EVAL_SECONDS=${EVAL_SECONDS:-300}  # 150 did not do: eight evaluations at once took ~250 s on 4 x H200
 GEN_ARGS=${GEN_ARGS:---preset medium}  # a config file instead, for a dry run on the CPU
 GEN_DEVICES=${GEN_DEVICES:-cuda:0,cuda:1,cuda:2}  # GPU 3 times inference meanwhile, alone on its card
-TEST_GPU=3
+TEST_GPU=${TEST_GPU:-3}  # NO_TESTS=1: neither the CUDA tests nor the benchmark beside the generation
 if [ -n "$TWO_GPUS" ]; then
   GEN_DEVICES=cuda:0,cuda:1; TEST_GPU=1; NO_BENCH_DURING=1; export OMP_NUM_THREADS=3
   RUNLIST=${RUNLIST:-"full-s0:full:0:0 full-s1:full:1:1 no_decomposition:no_decomposition:0:0 output_limit:output_limit:0:1
@@ -63,7 +63,7 @@ minutes_left() { python -c "print(max(0.5, round(($1 - $(date +%s)) / 60, 2)))";
 if [ -z "$MORE" ]; then
   ( time python -m datagen.cli generate $GEN_ARGS --out "$STORE" --device "$GEN_DEVICES" ) > "$OUT/generate.log" 2>&1 &
   GEN=$!
-  if [ "$DEVICE" = cuda ]; then  # on GPU 3, which has no share of the simulation
+  if [ "$DEVICE" = cuda ] && [ -z "$NO_TESTS" ]; then  # on GPU 3, which has no share of the simulation
     # (about as long as the generation: the runs start when both are done; torch.compile comes last,
     # so the time limit costs at most its row); on two GPUs only the tests, beside a simulation
     ( CUDA_VISIBLE_DEVICES=$TEST_GPU timeout 90 python -m pytest -q -p no:cacheprovider tests/training/test_gnn.py \
