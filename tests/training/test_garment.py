@@ -301,3 +301,39 @@ def test_training_attention_keeps_cuda_on_the_math_kernel():
         assert torch.backends.cuda.math_sdp_enabled()
         assert not torch.backends.cuda.mem_efficient_sdp_enabled() and not torch.backends.cuda.flash_sdp_enabled()
     assert (torch.backends.cuda.mem_efficient_sdp_enabled(), torch.backends.cuda.flash_sdp_enabled()) == before
+
+
+def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
+    """``relative_to: skinned``: the regressor learns the garment minus the template skinned to the
+    pose. A model whose output layer is zero then predicts exactly the skinned template: in the
+    evaluation (its row equals the baseline's) and when dressing a new motion file."""
+    from datagen.geometry.features import derive
+    from datagen.motion.motion import Motion
+    from datagen.store import open_store
+    from training.garment.run import dress_motion, evaluate_garment, load_garment, train_garment
+    from training.loop import read_metrics
+
+    run = tmp_path / "skinned"
+    train_garment(motion_store, run, GarmentConfig(**(SMALL | {"epochs": 3, "bos": "zero", "relative_to": "skinned"})),
+                  device="cpu")
+    losses = list(read_metrics(run, "train/loss_epoch").values())
+    assert len(losses) == 3 and all(np.isfinite(losses))
+    e = evaluate_garment(run, split="test", device="cpu")
+    assert e["relative_to"] == "skinned" and np.isfinite(e["model"]["rmse"])
+    ckpt = run / "checkpoints" / "best.ckpt"
+    state = torch.load(ckpt, map_location="cpu", weights_only=False)
+    for k in ("model.garment_out.weight", "model.garment_out.bias"):
+        state["state_dict"][k] = torch.zeros_like(state["state_dict"][k])
+    torch.save(state, ckpt)
+    e = evaluate_garment(run, split="test", device="cpu")
+    for k in ("rmse", "hausdorff", "sted"):
+        assert e["model"][k] == pytest.approx(e["skinned_baseline"][k], rel=1e-5, abs=1e-7), k
+    store = open_store(motion_store)
+    m = store.motions()
+    motion = Motion(poses=np.asarray(m["pose"][0][:5]), trans=np.asarray(m["trans"][0][:5]), fps=30.0, label=0,
+                    label_name="walk")
+    motion.save_npz(tmp_path / "walk.npz")
+    out = dress_motion(run, motion_file=tmp_path / "walk.npz", push_out_margin=None)
+    _, meta, _, _ = load_garment(run)
+    skin = derive(store.binding(int(meta["template"])), ["skin"], pose=motion.poses, trans=motion.trans)["skin"]
+    np.testing.assert_allclose(out["garment_vertices"], skin + motion.trans[:, None], atol=2e-5)

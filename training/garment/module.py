@@ -1,7 +1,7 @@
 """Paper 001's garment regressor in the training loop: L_G = L_V^G + λ_Lap L_Lap (eq. 3).
 
-L_V^G is the mean squared error of the garment's vertices (relative to the root translation, in
-``target_scale`` units); L_Lap that of their uniform mesh Laplacians (each vertex minus the mean of
+L_V^G is the mean squared error of the garment's vertices (relative to the root translation, or with
+``relative_to: skinned`` to the template skinned to the pose; in ``target_scale`` units); L_Lap that of their uniform mesh Laplacians (each vertex minus the mean of
 its neighbours on the template), which keeps wrinkles. Training uses teacher forcing; validation
 decodes greedily, as inference does, and reports the mean vertex error in mm.
 """
@@ -28,6 +28,11 @@ def uniform_laplacian(x: torch.Tensor, edges: torch.Tensor, degree: torch.Tensor
     return x - s / degree[:, None]
 
 
+def segment_names(relative_to: str) -> tuple[str, ...]:
+    """The segment arrays the regressor trains on (``relative_to``: as ``GarmentConfig``'s)."""
+    return ("pose", "trans", "label", "detail") + (("skin",) if relative_to == "skinned" else ())
+
+
 class GarmentModule(pl.LightningModule):
     def __init__(self, config: dict, vertices: int, faces):
         super().__init__()
@@ -43,16 +48,40 @@ class GarmentModule(pl.LightningModule):
         self.register_buffer("edges", edges, persistent=False)
         self.register_buffer("degree", degree, persistent=False)
         self.scale = float(config["target_scale"])
+        self.relative_to = config.get("relative_to", "translation")  # runs from before the switch: the paper's
         if self.model.bos is not None:  # pretrained before fitting, then frozen (§4.2)
             for p in self.model.bos.parameters():
                 p.requires_grad_(False)
 
+    def base(self, batch) -> torch.Tensor:
+        """What the regressor's frames are relative to, [B, T, V or 1, 3] m: the root translation
+        (paper 001) or the template skinned to each frame's pose (the store's derived ``skin`` plus
+        the translation; ``relative_to: skinned``)."""
+        base = batch["trans"].float()[:, :, None]
+        return base + batch["skin"].float() if self.relative_to == "skinned" else base
+
+    def base_of(self, binding, poses: torch.Tensor, trans: torch.Tensor) -> torch.Tensor:
+        """:meth:`base` [T, V or 1, 3] for one new motion (axis-angle ``poses`` [T, J, 3], ``trans``
+        [T, 3]) on the template's ``binding`` (``DatasetStore.binding``): the skinned template is
+        derived by the store's feature function, on the tensors' device."""
+        base = trans.float()[:, None]
+        if self.relative_to != "skinned":
+            return base
+        from datagen.geometry.features import derive
+
+        return base + derive(binding, ["skin"], pose=poses.float())["skin"]
+
+    def garment(self, out: torch.Tensor, base: torch.Tensor) -> torch.Tensor:
+        """Garment positions [B, T, V, 3] m of the regressor's output frames [B, T, V*3] on ``base``."""
+        B, T = out.shape[:2]
+        return out.float().reshape(B, T, -1, 3) / self.scale + base
+
     def targets(self, batch) -> tuple[torch.Tensor, torch.Tensor]:
-        """(pose features [B, T, 147], garment frames [B, T, V*3] relative to the translation, scaled)."""
+        """(pose features [B, T, 147], garment frames [B, T, V*3] relative to :meth:`base`, scaled)."""
         from training.motion.module import pose_features
 
         x, _ = pose_features(batch)
-        g = (batch["detail"].float() - batch["trans"].float()[:, :, None]) * self.scale
+        g = (batch["detail"].float() - self.base(batch)) * self.scale
         return x, g.flatten(2)
 
     def losses(self, pred: torch.Tensor, true: torch.Tensor) -> dict[str, torch.Tensor]:

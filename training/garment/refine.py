@@ -55,6 +55,7 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
     module.to(dev).eval()
     template = store.garment(int(meta["template"]))
+    binding = store.binding(int(meta["template"]))
     body = BodyLayer(store.body_model(), 1).to(dev)
     betas = torch.as_tensor(store.betas()[int(template["body"])], dtype=torch.float32, device=dev)
     faces = torch.as_tensor(np.asarray(store.body_model()["faces"], dtype=np.int64), device=dev)
@@ -73,17 +74,17 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
             rot = axis_angle_to_matrix(p)
             x = frames_to_features(rot[None], t[None])
             b = body(rot, t, betas[None].expand(len(rot), -1))
-            sets.append((x, t, b))
+            sets.append((x, module.base_of(binding, p, t), b))
         return sets
 
-    def garment_of(x, t):
-        return module.model.generate(x).float()[0].reshape(len(t), -1, 3) / module.scale + t[:, None]
+    def garment_of(x, base):
+        return module.garment(module.model.generate(x), base[None])[0]
 
     def share(sets) -> float:
         values = []
         with torch.no_grad():
-            for x, t, b in sets:
-                g = garment_of(x, t)
+            for x, base, b in sets:
+                g = garment_of(x, base)
                 values.append(inside_share(g, *body_contact(g, b, faces)))
         return float(np.mean(values))
 
@@ -92,13 +93,13 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     before = share(held_out)
     kept, dropped = [], 0
     with torch.no_grad():
-        for x, t, b in train_sets:
-            g = garment_of(x, t)
+        for x, base, b in train_sets:
+            g = garment_of(x, base)
             closest, normal = body_contact(g, b, faces)
             if inside_share(g, closest, normal) > drop_share:
                 dropped += 1
                 continue
-            kept.append((x, t, b, (g - t[:, None]) * module.scale))
+            kept.append((x, base, b, (g - base) * module.scale))
     if not kept:
         raise InputError(f"every sampled sequence has more than {drop_share:.0%} of its garment inside the body; the "
                          "regressor needs more training before refinement")
@@ -109,9 +110,10 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     losses = []
     g_rng = torch.Generator().manual_seed(seed)
     for _ in range(steps):
-        x, t, b, target = kept[int(torch.randint(len(kept), (1,), generator=g_rng))]
-        pred = module.model(x, target.reshape(1, len(t), -1)).float()[0].reshape(len(t), -1, 3)
-        g = pred / module.scale + t[:, None]
+        x, base, b, target = kept[int(torch.randint(len(kept), (1,), generator=g_rng))]
+        T = len(base)
+        pred = module.model(x, target.reshape(1, T, -1)).float()[0].reshape(T, -1, 3)
+        g = pred / module.scale + base
         closest, normal = body_contact(g.detach(), b, faces)
         loss = collision_loss(g, closest, normal, margin) * module.scale + keep_weight * torch.nn.functional.mse_loss(
             pred, target)

@@ -118,12 +118,13 @@ def _pretrain_bos(module, ds: SegmentDataset, config: GarmentConfig, device) -> 
 def train_garment(data: str | Path, out: str | Path, config: GarmentConfig, *, device: str = "auto",
                   resume: bool = False, force: bool = False) -> dict[str, Any]:
     """Train the regressor for ``config.garment``'s template on ``data``."""
-    from training.garment.module import GarmentModule
+    from training.garment.module import GarmentModule, segment_names
 
     accelerator = resolve_device(device)
     store = open_store(data)
     g = template_instance(store, config.garment)
-    train, val = _segments(store, "train", g), _segments(store, "val", g)
+    names = segment_names(config.relative_to)
+    train, val = _segments(store, "train", g, names), _segments(store, "val", g, names)
     garment = store.garment(g)
     meta = {"kind": KIND, "config": config.as_dict(), "template": g,
             "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
@@ -190,13 +191,13 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     ds = _segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
     sums = {f"{who}_{k}": 0.0 for who in ("model", "skinned") for k in ("sq", "hausdorff", "sted", "cosine")}
     counts = {"values": 0, "frames": 0, "segments": 0}
-    scale = module.scale
     for batch in torch.utils.data.DataLoader(ds, batch_size=4, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
-        x, gt = module.targets(batch)
-        B, T = gt.shape[:2]
-        true = gt.reshape(B, T, -1, 3) / scale
-        pred = module.model.generate(x, graph=True).float().reshape(B, T, -1, 3) / scale
+        x, _ = module.targets(batch)
+        trans = batch["trans"].float()[:, :, None]  # every figure in the translation's frame, as before
+        true = batch["detail"].float() - trans
+        pred = module.garment(module.model.generate(x, graph=True), module.base(batch)) - trans
+        B, T = true.shape[:2]
         skinned = batch["skin"].float()
         n_true = _normals(true.reshape(B * T, -1, 3), faces)
         for who, p in (("model", pred), ("skinned", skinned)):
@@ -217,11 +218,13 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     garment = store.attrs["garment_type_names"][int(store.garment(g)["type"])]
     return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "garment": garment, "template": g,
             "segments": counts["segments"], "frames": counts["frames"], "bos": meta["config"]["bos"],
+            "relative_to": module.relative_to,
             "model": rows["model"], "skinned_baseline": rows["skinned"]}
 
 
 def format_garment_evaluation(e: dict) -> str:
-    lines = [f"{e['garment']} (template {e['template']}, BOS {e['bos']}), {e['split']} split: {e['segments']} segments, "
+    lines = [f"{e['garment']} (template {e['template']}, BOS {e['bos']}, frames relative to the "
+             f"{e.get('relative_to', 'translation')}), {e['split']} split: {e['segments']} segments, "
              f"{e['frames']} frames; decoded greedily from the poses", "",
              f"{'':22s} {'RMSE (x1e-2 m)':>15s} {'Hausdorff (x1e-1 m)':>20s} {'STED (x1e-2)':>13s} "
              f"{'normal cosine':>14s}"]
@@ -275,11 +278,11 @@ def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = Non
     trans_t = torch.as_tensor(np.asarray(trans), dtype=torch.float32, device=dev)
     rot = axis_angle_to_matrix(poses_t)
     x = frames_to_features(rot[None], trans_t[None])
-    t0 = time.perf_counter()
-    garment = module.model.generate(x, graph=True).float()[0].reshape(len(poses_t), -1, 3) / module.scale
-    garment = garment + trans_t[:, None]
-    seconds = time.perf_counter() - t0
     g = int(meta["template"])
+    base = module.base_of(store.binding(g), poses_t, trans_t)
+    t0 = time.perf_counter()
+    garment = module.garment(module.model.generate(x, graph=True), base[None])[0]
+    seconds = time.perf_counter() - t0
     template = store.garment(g)
     body = BodyLayer(store.body_model(), 1).to(dev)
     betas = torch.as_tensor(store.betas()[int(template["body"])], dtype=torch.float32, device=dev)
