@@ -12,6 +12,11 @@
 #       e.g. one of benchmarks/configs/paper_motion_motions_only.yaml made on a CPU, for the generator alone)
 #   OUT=/tmp/o PHASE=more TOTAL=16 bash ...   every run of PHASE=train resumed for another command, to
 #       TOTAL minutes of training in all (repeat with a larger TOTAL)
+#   OUT=/tmp/o PHASE=regress MAXMIN=7 bash ...   the garment regressor alone, in one command: per template
+#       (GARMENTS) and frame (VARIANTS, NAME:CONFIG of benchmarks/configs: the paper's frame relative to
+#       the translation and drape's relative to the skinned template, both at 3e-4), the learned and the
+#       zero BOS, all at once; then each evaluated on the validation and the test split, and
+#       benchmarks/garment_table.py's table (the validation split picks per template)
 #   OUT=/tmp/o PHASE=eval bash ...    the validation split picks the KL weight and the latent (prior or
 #       per-label posterior fit) by generated FID; then Tables 3, 4, 6, 7, 8, 9 on the test split;
 #       refinement of the skirt (§3.4); sampled motions per label (for the contact sheets); a clothed
@@ -58,6 +63,21 @@ train|more)  # more: another command for every run of train, to TOTAL minutes in
     mkdir -p "$OUT/runs/$r"; cp -r "$RUNS/$r/logs" "$RUNS/$r/run.json" "$OUT/runs/$r/" 2>/dev/null
     cp "$RUNS/$r/train_summary.json" "$OUT/runs/$r/" 2>/dev/null; echo "== $r"; tail -3 "$OUT/${PHASE}_$r.log"
   done ;;
+regress)
+  VARIANTS=${VARIANTS:-"t:garment_lr3e-4 s:garment_lr3e-4_skinned"}
+  names=""
+  for g in $GARMENTS; do for v in $VARIANTS; do for b in learned zero; do
+    n=${g}_${v%%:*}; bos=""; [ $b = zero ] && { n=${n}_zero_bos; bos=--zero-bos; }; names="$names $n"
+    $D train garment --data "$STORE" --device $DEV --force --max-minutes "${MAXMIN:-7}" --garment $g $bos --out "$RUNS/$n" \
+      --config "benchmarks/configs/${v#*:}.yaml" > "$OUT/train_$n.log" 2>&1 &
+  done; done; done
+  wait
+  for n in $names; do for split in val test; do
+    $D evaluate "$RUNS/$n" --split $split --device $DEV --json "$OUT/eval_${n}_$split.json" > "$OUT/eval_${n}_$split.log" 2>&1 &
+  done; done
+  wait
+  for n in $names; do mkdir -p "$OUT/runs/$n"; cp -r "$RUNS/$n/logs" "$RUNS/$n/run.json" "$RUNS/$n/train_summary.json" "$OUT/runs/$n/" 2>/dev/null; done
+  python benchmarks/garment_table.py "$OUT" | tee "$OUT/table.txt" ;;
 eval)
   ev() { $D evaluate "$RUNS/$1" --split $2 --device $DEV --json "$OUT/eval_${1}_$2.json" $3 > "$OUT/eval_${1}_$2.log" 2>&1; }
   # 1. the validation split chooses the KL weight and where Z is drawn from (lowest generated FID)

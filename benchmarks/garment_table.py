@@ -1,0 +1,61 @@
+"""Tables 6/7/9 of paper 001's garment regressor from ``drape evaluate`` JSON files.
+
+``python benchmarks/garment_table.py OUT`` reads every ``OUT/eval_<RUN>_val.json`` and
+``OUT/eval_<RUN>_test.json`` of a garment regressor run and prints, per template, one row per run
+(validation RMSE; test RMSE, Hausdorff, STED and normal cosine) and the skinned template's test row,
+and marks per template the run with the lowest validation RMSE: the choice is made on the
+validation split only, and the test split is reported for every run beside it.
+"""
+
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+
+def main(argv: list[str]) -> int:
+    out = Path(argv[0])
+    runs: dict[str, dict[str, dict]] = {}
+    for path in sorted(out.glob("eval_*_*.json")):
+        run, split = path.stem[len("eval_"):].rsplit("_", 1)
+        e = json.loads(path.read_text())
+        if e.get("kind") == "garment":
+            runs.setdefault(run, {})[split] = e
+    if not runs:
+        print(f"no garment evaluations in {out}")
+        return 1
+    by_garment: dict[str, list[str]] = {}
+    for run, e in runs.items():
+        any_e = e.get("test") or e.get("val")
+        by_garment.setdefault(any_e["garment"], []).append(run)
+    head = (f"{'run':28s} {'frame':12s} {'BOS':8s} {'val RMSE cm':>11s} | {'test RMSE cm':>12s} {'Hausdorff dm':>12s} "
+            f"{'STED x1e-2':>10s} {'normal cos':>10s}")
+    for garment, names in sorted(by_garment.items()):
+        val = {n: runs[n]["val"]["model"]["rmse"] for n in names if "val" in runs[n]}
+        chosen = min(val, key=val.get) if val else None
+        print(f"\n{garment}: chosen on the validation split: {chosen}")
+        print(head)
+        base = None
+        for n in sorted(names):
+            e = runs[n].get("test")
+            v = f"{100 * val[n]:11.2f}" if n in val else f"{'-':>11s}"
+            meta = e or runs[n]["val"]
+            row = (f"{n + (' *' if n == chosen else ''):28s} {meta.get('relative_to', 'translation'):12s} "
+                   f"{meta['bos']:8s} {v} | ")
+            if e:
+                m = e["model"]
+                row += (f"{100 * m['rmse']:12.2f} {10 * m['hausdorff']:12.3f} {100 * m['sted']:10.1f} "
+                        f"{m['normal_cosine']:10.4f}   ({e['segments']} segments)")
+                base = e["skinned_baseline"]
+            else:
+                row += "no test evaluation"
+            print(row)
+        if base:
+            print(f"{'skinned template':28s} {'':12s} {'':8s} {'':11s} | {100 * base['rmse']:12.2f} "
+                  f"{10 * base['hausdorff']:12.3f} {100 * base['sted']:10.1f} {base['normal_cosine']:10.4f}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
