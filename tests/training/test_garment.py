@@ -320,6 +320,14 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
     assert len(losses) == 3 and all(np.isfinite(losses))
     e = evaluate_garment(run, split="test", device="cpu")
     assert e["relative_to"] == "skinned" and np.isfinite(e["model"]["rmse"])
+    # training derives the skinned template from the batch's poses (on the training device); it is the
+    # store's derived ``skin``, which evaluation reads
+    from training.data import SegmentDataset
+
+    module, meta, _, store0 = load_garment(run)
+    batch = next(iter(torch.utils.data.DataLoader(SegmentDataset(store0, "train", names=("pose", "trans", "skin")),
+                                                  batch_size=2)))
+    torch.testing.assert_close(module.skinned(batch["pose"]), batch["skin"].float(), atol=2e-6, rtol=0)
     ckpt = run / "checkpoints" / "best.ckpt"
     state = torch.load(ckpt, map_location="cpu", weights_only=False)
     for k in ("model.garment_out.weight", "model.garment_out.bias"):

@@ -28,11 +28,6 @@ def uniform_laplacian(x: torch.Tensor, edges: torch.Tensor, degree: torch.Tensor
     return x - s / degree[:, None]
 
 
-def segment_names(relative_to: str) -> tuple[str, ...]:
-    """The segment arrays the regressor trains on (``relative_to``: as ``GarmentConfig``'s)."""
-    return ("pose", "trans", "label", "detail") + (("skin",) if relative_to == "skinned" else ())
-
-
 class GarmentModule(pl.LightningModule):
     def __init__(self, config: dict, vertices: int, faces):
         super().__init__()
@@ -49,27 +44,34 @@ class GarmentModule(pl.LightningModule):
         self.register_buffer("degree", degree, persistent=False)
         self.scale = float(config["target_scale"])
         self.relative_to = config.get("relative_to", "translation")  # runs from before the switch: the paper's
+        self.binding = None  # the template on its body (DatasetStore.binding), for the skinned frame
         if self.model.bos is not None:  # pretrained before fitting, then frozen (§4.2)
             for p in self.model.bos.parameters():
                 p.requires_grad_(False)
 
     def base(self, batch) -> torch.Tensor:
         """What the regressor's frames are relative to, [B, T, V or 1, 3] m: the root translation
-        (paper 001) or the template skinned to each frame's pose (the store's derived ``skin`` plus
-        the translation; ``relative_to: skinned``)."""
+        (paper 001) or the template skinned to each frame's pose (``relative_to: skinned``): the
+        batch's ``skin`` where it has one (evaluation reads it for the baseline), else derived here
+        from ``pose`` by the store's feature function on the batch's device (:meth:`skinned`)."""
         base = batch["trans"].float()[:, :, None]
-        return base + batch["skin"].float() if self.relative_to == "skinned" else base
-
-    def base_of(self, binding, poses: torch.Tensor, trans: torch.Tensor) -> torch.Tensor:
-        """:meth:`base` [T, V or 1, 3] for one new motion (axis-angle ``poses`` [T, J, 3], ``trans``
-        [T, 3]) on the template's ``binding`` (``DatasetStore.binding``): the skinned template is
-        derived by the store's feature function, on the tensors' device."""
-        base = trans.float()[:, None]
         if self.relative_to != "skinned":
             return base
+        skin = batch.get("skin")
+        return base + (self.skinned(batch["pose"]) if skin is None else skin.float())
+
+    def skinned(self, pose: torch.Tensor) -> torch.Tensor:
+        """The template skinned to axis-angle poses [B, T, J, 3], without the translation: [B, T, V, 3]
+        (the store's derived ``skin``), on the poses' device; needs :attr:`binding` (the template
+        on its body, ``DatasetStore.binding``), which training and loading set."""
+        if self.binding is None:
+            raise RuntimeError("the skinned frame needs the template's binding: set module.binding = "
+                               "store.binding(template) (train_garment and load_garment do)")
         from datagen.geometry.features import derive
 
-        return base + derive(binding, ["skin"], pose=poses.float())["skin"]
+        B, T = pose.shape[:2]
+        skin = derive(self.binding, ["skin"], pose=pose.float().reshape(B * T, *pose.shape[2:]))["skin"]
+        return skin.reshape(B, T, -1, 3)
 
     def garment(self, out: torch.Tensor, base: torch.Tensor) -> torch.Tensor:
         """Garment positions [B, T, V, 3] m of the regressor's output frames [B, T, V*3] on ``base``."""

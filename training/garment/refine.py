@@ -55,7 +55,6 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
     module.to(dev).eval()
     template = store.garment(int(meta["template"]))
-    binding = store.binding(int(meta["template"]))
     body = BodyLayer(store.body_model(), 1).to(dev)
     betas = torch.as_tensor(store.betas()[int(template["body"])], dtype=torch.float32, device=dev)
     faces = torch.as_tensor(np.asarray(store.body_model()["faces"], dtype=np.int64), device=dev)
@@ -74,7 +73,7 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
             rot = axis_angle_to_matrix(p)
             x = frames_to_features(rot[None], t[None])
             b = body(rot, t, betas[None].expand(len(rot), -1))
-            sets.append((x, module.base_of(binding, p, t), b))
+            sets.append((x, module.base({"pose": p[None], "trans": t[None]})[0], b))
         return sets
 
     def garment_of(x, base):

@@ -118,13 +118,12 @@ def _pretrain_bos(module, ds: SegmentDataset, config: GarmentConfig, device) -> 
 def train_garment(data: str | Path, out: str | Path, config: GarmentConfig, *, device: str = "auto",
                   resume: bool = False, force: bool = False) -> dict[str, Any]:
     """Train the regressor for ``config.garment``'s template on ``data``."""
-    from training.garment.module import GarmentModule, segment_names
+    from training.garment.module import GarmentModule
 
     accelerator = resolve_device(device)
     store = open_store(data)
     g = template_instance(store, config.garment)
-    names = segment_names(config.relative_to)
-    train, val = _segments(store, "train", g, names), _segments(store, "val", g, names)
+    train, val = _segments(store, "train", g), _segments(store, "val", g)
     garment = store.garment(g)
     meta = {"kind": KIND, "config": config.as_dict(), "template": g,
             "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
@@ -133,6 +132,7 @@ def train_garment(data: str | Path, out: str | Path, config: GarmentConfig, *, d
     out = prepare_run(out, resume=resume, force=force, meta=meta)
     seed_everything(config.seed)
     module = GarmentModule(config.as_dict(), len(garment["rest_vertices"]), garment["faces"])
+    module.binding = store.binding(g)  # the skinned frame's template, derived on the training device
     dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
     bos_losses = [] if resume else _pretrain_bos(module, train, config, dev)
     module.to("cpu")
@@ -164,6 +164,7 @@ def load_garment(run: str | Path, *, checkpoint: str = "best", data: str | Path 
     store = open_store(data or meta["store"]["path"])
     faces = store.garment(int(meta["template"]))["faces"]
     module = GarmentModule.load_from_checkpoint(path, map_location="cpu", faces=faces)
+    module.binding = store.binding(int(meta["template"]))
     module.eval()
     return module, meta, path, store
 
@@ -279,7 +280,7 @@ def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = Non
     rot = axis_angle_to_matrix(poses_t)
     x = frames_to_features(rot[None], trans_t[None])
     g = int(meta["template"])
-    base = module.base_of(store.binding(g), poses_t, trans_t)
+    base = module.base({"pose": poses_t[None], "trans": trans_t[None]})[0]
     t0 = time.perf_counter()
     garment = module.garment(module.model.generate(x, graph=True), base[None])[0]
     seconds = time.perf_counter() - t0
