@@ -2,7 +2,7 @@
 
 ``python benchmarks/garment_table.py OUT`` reads every ``OUT/eval_<RUN>_val.json`` and
 ``OUT/eval_<RUN>_test.json`` of a garment regressor run and prints, per template, one row per run
-(validation RMSE; test RMSE, Hausdorff, STED and normal cosine) and the skinned template's test row,
+(validation RMSE; test RMSE, Hausdorff, STED, normal cosine and the share of vertices inside the body) and the skinned template's test row,
 and marks per template the run with the lowest validation RMSE: the choice is made on the
 validation split only, and the test split is reported for every run beside it.
 """
@@ -12,6 +12,11 @@ from __future__ import annotations
 import json
 import sys
 from pathlib import Path
+
+
+def _inside(row: dict) -> str:
+    """The share of garment vertices inside the body, % (evaluations from before it was reported: -)."""
+    return f"{100 * row['inside_share']:8.2f}" if "inside_share" in row else f"{'-':>8s}"
 
 
 def main(argv: list[str]) -> int:
@@ -30,7 +35,7 @@ def main(argv: list[str]) -> int:
         any_e = e.get("test") or e.get("val")
         by_garment.setdefault(any_e["garment"], []).append(run)
     head = (f"{'run':28s} {'frame':12s} {'BOS':8s} {'val RMSE cm':>11s} | {'test RMSE cm':>12s} {'Hausdorff dm':>12s} "
-            f"{'STED x1e-2':>10s} {'normal cos':>10s}")
+            f"{'STED x1e-2':>10s} {'normal cos':>10s} {'inside %':>8s}")
     for garment, names in sorted(by_garment.items()):
         val = {n: runs[n]["val"]["model"]["rmse"] for n in names if "val" in runs[n]}
         chosen = min(val, key=val.get) if val else None
@@ -46,14 +51,15 @@ def main(argv: list[str]) -> int:
             if e:
                 m = e["model"]
                 row += (f"{100 * m['rmse']:12.2f} {10 * m['hausdorff']:12.3f} {100 * m['sted']:10.1f} "
-                        f"{m['normal_cosine']:10.4f}   ({e['segments']} segments)")
+                        f"{m['normal_cosine']:10.4f} {_inside(m)}   ({e['segments']} segments)")
                 base = e["skinned_baseline"]
             else:
                 row += "no test evaluation"
             print(row)
         if base:
             print(f"{'skinned template':28s} {'':12s} {'':8s} {'':11s} | {100 * base['rmse']:12.2f} "
-                  f"{10 * base['hausdorff']:12.3f} {100 * base['sted']:10.1f} {base['normal_cosine']:10.4f}")
+                  f"{10 * base['hausdorff']:12.3f} {100 * base['sted']:10.1f} {base['normal_cosine']:10.4f} "
+                  f"{_inside(base)}")
     return 0
 
 

@@ -129,6 +129,8 @@ def test_training_loss_falls_and_evaluation_gives_the_tables(garment_run, capsys
     assert e["garment"] == "skirt" and e["frames"] == e["segments"] * 3
     for row in (e["model"], e["skinned_baseline"]):
         assert all(np.isfinite(v) for v in row.values()) and -1 <= row["normal_cosine"] <= 1
+        assert 0 <= row["inside_share"] <= 1
+    assert 0 <= e["simulated_inside_share"] <= 1
     assert main(["evaluate", str(run), "--split", "test", "--device", "cpu"]) == 0
     assert "skinned template" in capsys.readouterr().out
     assert json.loads((run / "run.json").read_text())["kind"] == "garment"
@@ -334,7 +336,7 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
         state["state_dict"][k] = torch.zeros_like(state["state_dict"][k])
     torch.save(state, ckpt)
     e = evaluate_garment(run, split="test", device="cpu")
-    for k in ("rmse", "hausdorff", "sted"):
+    for k in ("rmse", "hausdorff", "sted", "inside_share"):
         assert e["model"][k] == pytest.approx(e["skinned_baseline"][k], rel=1e-5, abs=1e-7), k
     store = open_store(motion_store)
     m = store.motions()

@@ -4,7 +4,8 @@ The template is the garment instance of the config's type with the most training
 segments in every split are used (a ``paper-motion`` store keeps the same garments in every split:
 only the motions differ). :func:`evaluate_garment` gives Tables 6/7/9's figures on a split's unseen
 segments, decoded greedily from the poses alone: RMSE of the vertices (m), Hausdorff distance (m,
-mean over frames), STED (:mod:`training.motion.sted`) and the cosine similarity of vertex normals,
+mean over frames), STED (:mod:`training.motion.sted`), the cosine similarity of vertex normals and
+the share of garment vertices inside the posed body (eq. 4's test; also of the simulated garment),
 beside a trivial baseline (the template skinned to the pose: the store's derived ``skin`` plus the
 translation).
 """
@@ -190,7 +191,15 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     faces = torch.as_tensor(np.asarray(store.garment(g)["faces"], dtype=np.int64), device=dev)
     edges = torch.as_tensor(template_edges(store.garment(g)["faces"]), device=dev)
     ds = _segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
-    sums = {f"{who}_{k}": 0.0 for who in ("model", "skinned") for k in ("sq", "hausdorff", "sted", "cosine")}
+    from datagen.geometry.rotations import axis_angle_to_matrix
+    from training.garment.contact import body_contact, inside_share
+    from training.motion.module import BodyLayer
+
+    body = BodyLayer(store.body_model(), 1).to(dev)  # the posed body, for the share of vertices inside it
+    betas = torch.as_tensor(store.betas()[int(store.garment(g)["body"])], dtype=torch.float32, device=dev)
+    body_faces = torch.as_tensor(np.asarray(store.body_model()["faces"], dtype=np.int64), device=dev)
+    sums = {f"{who}_{k}": 0.0 for who in ("model", "skinned") for k in ("sq", "hausdorff", "sted", "cosine", "inside")}
+    sums["simulated_inside"] = 0.0
     counts = {"values": 0, "frames": 0, "segments": 0}
     for batch in torch.utils.data.DataLoader(ds, batch_size=4, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
@@ -201,7 +210,16 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
         B, T = true.shape[:2]
         skinned = batch["skin"].float()
         n_true = _normals(true.reshape(B * T, -1, 3), faces)
+        posed = body(axis_angle_to_matrix(batch["pose"].float()).reshape(B * T, -1, 3, 3),
+                     trans.reshape(B * T, 3), betas[None].expand(B * T, -1)) - trans.reshape(B * T, 1, 3)
+
+        def inside(p):  # share of the frames' garment vertices inside the posed body, weighted by frames
+            q = p.reshape(B * T, -1, 3)
+            return inside_share(q, *body_contact(q, posed, body_faces)) * B * T
+
+        sums["simulated_inside"] += inside(true)
         for who, p in (("model", pred), ("skinned", skinned)):
+            sums[f"{who}_inside"] += inside(p)
             sums[f"{who}_sq"] += float(((p - true) ** 2).sum())
             sums[f"{who}_hausdorff"] += float(hausdorff(p.reshape(B * T, -1, 3), true.reshape(B * T, -1, 3)).sum())
             sums[f"{who}_sted"] += float(sted(p, true, edges)["sted"].sum())
@@ -215,12 +233,14 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
         rows[who] = {"rmse": (sums[f"{who}_sq"] / counts["values"]) ** 0.5,
                      "hausdorff": sums[f"{who}_hausdorff"] / counts["frames"],
                      "sted": sums[f"{who}_sted"] / counts["segments"],
-                     "normal_cosine": sums[f"{who}_cosine"] / counts["frames"]}
+                     "normal_cosine": sums[f"{who}_cosine"] / counts["frames"],
+                     "inside_share": sums[f"{who}_inside"] / counts["frames"]}
     garment = store.attrs["garment_type_names"][int(store.garment(g)["type"])]
     return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "garment": garment, "template": g,
             "segments": counts["segments"], "frames": counts["frames"], "bos": meta["config"]["bos"],
             "relative_to": module.relative_to,
-            "model": rows["model"], "skinned_baseline": rows["skinned"]}
+            "model": rows["model"], "skinned_baseline": rows["skinned"],
+            "simulated_inside_share": sums["simulated_inside"] / counts["frames"]}
 
 
 def format_garment_evaluation(e: dict) -> str:
@@ -228,10 +248,16 @@ def format_garment_evaluation(e: dict) -> str:
              f"{e.get('relative_to', 'translation')}), {e['split']} split: {e['segments']} segments, "
              f"{e['frames']} frames; decoded greedily from the poses", "",
              f"{'':22s} {'RMSE (x1e-2 m)':>15s} {'Hausdorff (x1e-1 m)':>20s} {'STED (x1e-2)':>13s} "
-             f"{'normal cosine':>14s}"]
+             f"{'normal cosine':>14s} {'inside body %':>14s}"]
     for name, r in (("model", e["model"]), ("skinned template", e["skinned_baseline"])):
+        inside = f"{100 * r['inside_share']:14.2f}" if "inside_share" in r else f"{'-':>14s}"
         lines.append(f"{name:22s} {100 * r['rmse']:15.3f} {10 * r['hausdorff']:20.3f} {100 * r['sted']:13.3f} "
-                     f"{r['normal_cosine']:14.4f}")
+                     f"{r['normal_cosine']:14.4f} {inside}")
+    if "simulated_inside_share" in e:
+        lines.append(f"{'simulated garment':22s} {'':15s} {'':20s} {'':13s} {'':14s} "
+                     f"{100 * e['simulated_inside_share']:14.2f}")
+    lines.append("(inside body: the share of garment vertices whose closest posed-body vertex's normal points away "
+                 "from them, paper 001's test for eq. 4)")
     return "\n".join(lines)
 
 
