@@ -2,9 +2,10 @@
 
 ``python benchmarks/garment_table.py OUT`` reads every ``OUT/eval_<RUN>_val.json`` and
 ``OUT/eval_<RUN>_test.json`` of a garment regressor run and prints, per template, one row per run
-(validation RMSE; test RMSE, Hausdorff, STED, normal cosine and the share of vertices inside the body) and the skinned template's test row,
-and marks per template the run with the lowest validation RMSE: the choice is made on the
-validation split only, and the test split is reported for every run beside it.
+(validation RMSE; test RMSE, Hausdorff, STED, normal cosine and the share of vertices inside the
+body) and the skinned template's test row, and marks per template the run with the lowest
+validation RMSE: the choice is made on the validation split only, and the test split is reported
+for every run beside it.
 """
 
 from __future__ import annotations

@@ -1,8 +1,9 @@
 """Paper 001's garment regressor in the training loop: L_G = L_V^G + λ_Lap L_Lap (eq. 3).
 
 L_V^G is the mean squared error of the garment's vertices (relative to the root translation, or with
-``relative_to: skinned`` to the template skinned to the pose; in ``target_scale`` units); L_Lap that of their uniform mesh Laplacians (each vertex minus the mean of
-its neighbours on the template), which keeps wrinkles. Training uses teacher forcing; validation
+``relative_to: skinned`` to the template skinned to the pose; in ``target_scale`` units); L_Lap that
+of their uniform mesh Laplacians (each vertex minus the mean of its neighbours on the template),
+which keeps wrinkles. Training uses teacher forcing; validation
 decodes greedily, as inference does, and reports the mean vertex error in mm.
 """
 

@@ -176,6 +176,14 @@ def _normals(v: torch.Tensor, faces: torch.Tensor) -> torch.Tensor:
     return vertex_normals(v, faces)
 
 
+def _inside_share(garment: torch.Tensor, posed: torch.Tensor, body_faces: torch.Tensor) -> float:
+    """The share of garment vertices [B, T, V, 3] inside posed bodies [B*T, Nb, 3] (eq. 4's test)."""
+    from training.garment.contact import body_contact, inside_share
+
+    q = garment.reshape(len(posed), -1, 3)
+    return inside_share(q, *body_contact(q, posed, body_faces))
+
+
 @torch.no_grad()
 def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: str = "test",
                      device: str = "auto") -> dict[str, Any]:
@@ -192,7 +200,6 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     edges = torch.as_tensor(template_edges(store.garment(g)["faces"]), device=dev)
     ds = _segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
     from datagen.geometry.rotations import axis_angle_to_matrix
-    from training.garment.contact import body_contact, inside_share
     from training.motion.module import BodyLayer
 
     body = BodyLayer(store.body_model(), 1).to(dev)  # the posed body, for the share of vertices inside it
@@ -210,16 +217,12 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
         B, T = true.shape[:2]
         skinned = batch["skin"].float()
         n_true = _normals(true.reshape(B * T, -1, 3), faces)
+        # the body posed without the translation, as the figures are; inside shares weighted by frames
         posed = body(axis_angle_to_matrix(batch["pose"].float()).reshape(B * T, -1, 3, 3),
-                     trans.reshape(B * T, 3), betas[None].expand(B * T, -1)) - trans.reshape(B * T, 1, 3)
-
-        def inside(p):  # share of the frames' garment vertices inside the posed body, weighted by frames
-            q = p.reshape(B * T, -1, 3)
-            return inside_share(q, *body_contact(q, posed, body_faces)) * B * T
-
-        sums["simulated_inside"] += inside(true)
+                     trans.new_zeros(B * T, 3), betas[None].expand(B * T, -1))
+        sums["simulated_inside"] += _inside_share(true, posed, body_faces) * B * T
         for who, p in (("model", pred), ("skinned", skinned)):
-            sums[f"{who}_inside"] += inside(p)
+            sums[f"{who}_inside"] += _inside_share(p, posed, body_faces) * B * T
             sums[f"{who}_sq"] += float(((p - true) ** 2).sum())
             sums[f"{who}_hausdorff"] += float(hausdorff(p.reshape(B * T, -1, 3), true.reshape(B * T, -1, 3)).sum())
             sums[f"{who}_sted"] += float(sted(p, true, edges)["sted"].sum())
@@ -244,9 +247,9 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
 
 
 def format_garment_evaluation(e: dict) -> str:
-    lines = [f"{e['garment']} (template {e['template']}, BOS {e['bos']}, frames relative to the "
-             f"{e.get('relative_to', 'translation')}), {e['split']} split: {e['segments']} segments, "
-             f"{e['frames']} frames; decoded greedily from the poses", "",
+    frame = {"translation": "the translation", "skinned": "the skinned template"}[e.get("relative_to", "translation")]
+    lines = [f"{e['garment']} (template {e['template']}, BOS {e['bos']}, frames relative to {frame}), "
+             f"{e['split']} split: {e['segments']} segments, {e['frames']} frames; decoded greedily from the poses", "",
              f"{'':22s} {'RMSE (x1e-2 m)':>15s} {'Hausdorff (x1e-1 m)':>20s} {'STED (x1e-2)':>13s} "
              f"{'normal cosine':>14s} {'inside body %':>14s}"]
     for name, r in (("model", e["model"]), ("skinned template", e["skinned_baseline"])):
