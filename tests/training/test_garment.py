@@ -347,3 +347,9 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
     _, meta, _, _ = load_garment(run)
     skin = derive(store.binding(int(meta["template"])), ["skin"], pose=motion.poses, trans=motion.trans)["skin"]
     np.testing.assert_allclose(out["garment_vertices"], skin + motion.trans[:, None], atol=2e-5)
+    # paper 001's own frame (relative to the translation) stays a switch, and its runs evaluate as before
+    paper = tmp_path / "paper-frame"
+    train_garment(motion_store, paper, GarmentConfig(**(SMALL | {"epochs": 2, "relative_to": "translation"})),
+                  device="cpu")
+    e = evaluate_garment(paper, split="test", device="cpu")
+    assert e["relative_to"] == "translation" and all(np.isfinite(v) for v in e["model"].values())
