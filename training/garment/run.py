@@ -200,7 +200,7 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     edges = torch.as_tensor(template_edges(store.garment(g)["faces"]), device=dev)
     ds = _segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
     from datagen.geometry.rotations import axis_angle_to_matrix
-    from training.motion.module import BodyLayer
+    from training.motion.module import BodyLayer, pose_features
 
     body = BodyLayer(store.body_model(), 1).to(dev)  # the posed body, for the share of vertices inside it
     betas = torch.as_tensor(store.betas()[int(store.garment(g)["body"])], dtype=torch.float32, device=dev)
@@ -210,7 +210,7 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     counts = {"values": 0, "frames": 0, "segments": 0}
     for batch in torch.utils.data.DataLoader(ds, batch_size=4, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
-        x, _ = module.targets(batch)
+        x, _ = pose_features(batch)  # the model's input only: the figures compare positions, not targets
         trans = batch["trans"].float()[:, :, None]  # every figure in the translation's frame, as before
         true = batch["detail"].float() - trans
         pred = module.garment(module.model.generate(x, graph=True), module.base(batch)) - trans
