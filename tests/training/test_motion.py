@@ -89,6 +89,7 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
     # the segment's own mean pose is the best static pose: closer than the label's mean on every frame set
     assert e["own_mean_pose"]["pose_rmse"] < e["mean_pose_baseline"]["pose_rmse"]
     assert e["frames"] == e["segments"] * 3
+    assert e["real_speed"] > 0  # how much the reconstructions move against the true segments
     g = e["generation"]
     assert g["repetitions"] == 3 and 0 <= g["recognizer_test_accuracy"] <= 1
     for part in ("generated", "real"):
@@ -101,7 +102,7 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
     assert main(["evaluate", str(run), "--split", "test", "--device", "cpu", "--repetitions", "2"]) == 0
     out = capsys.readouterr().out
     assert "label's mean pose" in out and "segment's own mean pose" in out and "generated, prior" in out and "generated, posterior" in out
-    assert "multimodality" in out
+    assert "multimodality" in out and "speed of the reconstructions" in out
 
 
 def test_the_posterior_latent_is_each_labels_gaussian_over_the_training_posteriors(motion_run, tmp_path):

@@ -1,0 +1,59 @@
+#!/bin/bash
+# Issue 27 on ONE GPU in three commands of at most ten minutes, the machine kept warm between them:
+#   OUT=$OUT PART=1 bash benchmarks/garment_one_gpu_run.sh   the paper-motion store in one batch (~9.5 min;
+#       carry warp's kernel cache, or the compilation does not fit)
+#   OUT=$OUT PART=2 bash ...   the garment regressors in drape's skinned frame at 3e-4 and at paper 001's 1e-3,
+#       with the learned and the zero BOS, per template (12 runs at once, MAXMIN minutes each), evaluated on
+#       the validation and the test split (benchmarks/garment_table.py chooses per template on validation);
+#       beside them a motion generator for the refinement's sampled motions (GEN_MINUTES)
+#   OUT=$OUT PART=3 bash ...   each template's chosen regressor refined (§3.4) on motions sampled from that
+#       generator, the refined runs evaluated on the test split (the share of vertices inside the body on
+#       test motions, before and after), the table again, and a clothed sample per template (USD + GIF;
+#       usd-core must be importable: USD=DIR, a `pip install --target DIR` of its wheel)
+# Everything persistent lives in W (default /tmp/p27); each part's logs come back as $OUT/part$PART.tgz
+# (the device tool returns at most eight files), the clothed samples' GIFs beside it.
+set -o pipefail
+OUT=${OUT:?}; PART=${PART:?}; W=${W:-/tmp/p27}; STORE=$W/paper-motion.zarr; RUNS=$W/runs; EV=$W/eval
+mkdir -p "$OUT" "$W" "$RUNS" "$EV"
+D="python -m datagen.cli"
+log="$OUT/part$PART.log"
+case "$PART" in
+1)
+  OUT=$W/gen STORE=$STORE RUNS=$RUNS PHASE=gen BATCH=252 LIMIT=${LIMIT:-9.6} bash benchmarks/paper_motion_gpu_run.sh 2>&1 | tee "$log"
+  cp -r "$W/gen" "$OUT/gen" ;;
+2)
+  $D train motion --data "$STORE" --out "$RUNS/motion" --config benchmarks/configs/motion_paper.yaml --device ${DEV:-cuda} --force \
+     --max-minutes "${GEN_MINUTES:-5.5}" > "$EV/train_motion.log" 2>&1 &
+  OUT=$EV STORE=$STORE RUNS=$RUNS PHASE=regress MAXMIN=${MAXMIN:-5} \
+     VARIANTS=${VARIANTS:-"s3:garment_lr3e-4_skinned s1:garment_lr1e-3_skinned"} bash benchmarks/paper_motion_gpu_run.sh 2>&1 | tee "$log"
+  wait
+  tail -2 "$EV/train_motion.log" | tee -a "$log" ;;
+3)
+  [ -n "$USD" ] && export PYTHONPATH=$PYTHONPATH:$USD
+  chosen=$(sed -n 's/^\([a-z]*\): chosen on the validation split: \(.*\)$/\2/p' "$EV/table.txt")
+  echo "chosen on the validation split: $chosen" | tee "$log"
+  for n in $chosen; do
+    $D train refine --garment-model "$RUNS/$n" --motion-model "$RUNS/motion" --latent posterior --out "$RUNS/${n}_refined" \
+       --device ${DEV:-cuda} --force > "$EV/refine_$n.log" 2>&1 &
+  done
+  wait
+  for n in $chosen; do
+    $D evaluate "$RUNS/${n}_refined" --split test --device ${DEV:-cuda} --json "$EV/eval_${n}_refined_test.json" > "$EV/eval_${n}_refined_test.log" 2>&1 &
+  done
+  wait
+  for n in $chosen; do
+    mkdir -p "$EV/runs/${n}_refined"; cp "$RUNS/${n}_refined/run.json" "$EV/runs/${n}_refined/" 2>/dev/null
+    echo "== refine $n"; grep -v "it/s\]$" "$EV/refine_$n.log" | tail -4
+  done 2>&1 | tee -a "$log"
+  python benchmarks/garment_table.py "$EV" | tee "$EV/table_refined.txt" | tee -a "$log"
+  mkdir -p "$EV/clothed"
+  for n in $chosen; do
+    g=${n%%_*}
+    $D sample clothed --motion-model "$RUNS/motion" --garment-model "$RUNS/${n}_refined" --label dance_disco --seed 0 \
+       --out "$EV/clothed/${g}_dance_disco.usd" --video "$EV/clothed/${g}_dance_disco.gif" --device ${DEV:-cuda} > "$EV/clothed/$g.log" 2>&1
+    echo "== clothed $g: exit $?"; tail -3 "$EV/clothed/$g.log"
+  done 2>&1 | tee -a "$log"
+  cp "$EV"/clothed/*.gif "$OUT/" 2>/dev/null ;;
+esac
+tar czf "$OUT/part$PART.tgz" --exclude='*.ckpt' --exclude='events.out.*' --exclude='*.gif' -C "$W" $( [ "$PART" = 1 ] && echo gen || echo eval)
+ls -la "$OUT"
