@@ -39,11 +39,7 @@ case "$PART" in
   ev motion val "--repetitions 10" & ev motion test & ev motion_novl test & wait
   python benchmarks/choose_motion_run.py "$EV" motion | tee "$EV/choice.txt" | tee -a "$log"
   latent=$(tail -1 "$EV/choice.txt" | awk '{print $2}'); latent=${latent:-posterior}
-  mkdir -p "$EV/samples"
-  labels=$(python -c "import json, sys; print(' '.join(json.load(open(sys.argv[1]))['labels']))" "$RUNS/motion/run.json")
-  for l in $labels; do
-    $D sample motion "$RUNS/motion" --label "$l" --latent $latent --count 4 --seed 0 --out "$EV/samples/$l" >> "$EV/sample_motion.log" 2>&1
-  done
+  $D sample motion "$RUNS/motion" --label all --latent $latent --count 4 --seed 0 --out "$EV/samples" > "$EV/sample_motion.log" 2>&1
   for f in "$EV"/eval_*_test.log; do echo "== $f"; grep -v "^Module\|^Warp" "$f" | tail -22; done 2>&1 | tee -a "$log" ;;
 esac
 tar czf "$OUT/part$PART.tgz" --exclude='*.ckpt' --exclude='events.out.*' -C "$W" eval

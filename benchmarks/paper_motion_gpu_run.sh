@@ -91,9 +91,7 @@ eval)
   # 2. the test split for every motion run; the refinement and samples from the chosen one
   for r in $MOTIONS; do ev $r test & done
   $D train refine --garment-model "$RUNS/skirt" --motion-model "$RUNS/$best" --latent $latent --out "$RUNS/skirt_refined" --device $DEV --force > "$OUT/refine_skirt.log" 2>&1 &
-  mkdir -p "$OUT/samples"
-  labels=$(python -c "import json, sys; print(' '.join(json.load(open(sys.argv[1]))['labels']))" "$RUNS/$best/run.json")
-  for l in $labels; do $D sample motion "$RUNS/$best" --label "$l" --latent $latent --count 4 --seed 0 --out "$OUT/samples/$l" >> "$OUT/sample_motion.log" 2>&1; done
+  $D sample motion "$RUNS/$best" --label all --latent $latent --count 4 --seed 0 --out "$OUT/samples" > "$OUT/sample_motion.log" 2>&1
   wait
   ev skirt_refined test
   $D sample clothed --motion-model "$RUNS/$best" --garment-model "$RUNS/skirt_refined" --latent $latent --label dance_disco --seed 0 \

@@ -91,7 +91,9 @@ def register(sub, formatter) -> None:
     samplers = p.add_subparsers(dest="what", metavar="WHAT", required=True)
     s = samplers.add_parser("motion", formatter_class=formatter, help="motions of a label")
     s.add_argument("run", help="a run directory of `drape train motion`")
-    s.add_argument("--label", required=True, help="one of the labels the model was trained on")
+    s.add_argument("--label", required=True,
+                   help="one of the labels the model was trained on; several separated by commas, or all (each "
+                        "label's motions then go into OUT/<label>/, the model loaded once)")
     s.add_argument("--count", type=int, default=8)
     s.add_argument("--seed", type=int, default=0)
     s.add_argument("--out", required=True, help="a directory for the .npz files")
@@ -230,7 +232,7 @@ def _cmd_sample_motion(args) -> int:
     t0 = time.perf_counter()
     paths = sample_motions(args.run, args.label, args.count, args.seed, args.out, device=args.device,
                            frames=args.frames, latent=args.latent)
-    print(f"wrote {len(paths)} {args.label} motions into {args.out} ({time.perf_counter() - t0:.1f} s): "
+    print(f"wrote {len(paths)} motions of {args.label} into {args.out} ({time.perf_counter() - t0:.1f} s): "
           f"{paths[0].name} .. {paths[-1].name}; e.g. drape motion export {paths[0]} --format bvh --out "
           f"{paths[0].with_suffix('.bvh')}")
     return 0

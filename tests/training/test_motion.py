@@ -185,6 +185,13 @@ def test_sampled_motions_are_library_motions_that_export(motion_run, tmp_path, c
     assert Motion.load_npz(next(longer.glob("*.npz"))).frame_count == 20
     bvh = tmp_path / "g.bvh"
     assert main(["motion", "export", str(files[0]), "--format", "bvh", "--out", str(bvh)]) == 0 and bvh.is_file()
+    # every learned label in one call (the model loaded once): OUT/<label>/, the files one call per label writes
+    learned = [n for n in json.loads((run / "run.json").read_text())["labels"]
+               if n not in motion_run[1]["labels_without_training_segments"]]
+    each = tmp_path / "each"
+    assert main(["sample", "motion", str(run), "--label", "all", "--count", "3", "--seed", "4", "--out", str(each)]) == 0
+    assert sorted(p.name for p in each.iterdir()) == sorted(learned)
+    assert np.array_equal(Motion.load_npz(each / "walk" / files[0].name).poses, m.poses)
 
 
 def test_bad_input_gets_one_clear_line(motion_run, tmp_path):
@@ -197,6 +204,10 @@ def test_bad_input_gets_one_clear_line(motion_run, tmp_path):
         sample_motions(run, unseen[0], 2, 0, tmp_path / "a")
     with pytest.raises(InputError, match="not one this model was trained on: walk"):
         sample_motions(run, "moonwalk", 2, 0, tmp_path / "a")
+    with pytest.raises(InputError, match="'moonwalk' is not one this model was trained on"):  # checked before writing walk
+        sample_motions(run, "walk,moonwalk", 2, 0, tmp_path / "a")
+    with pytest.raises(InputError, match="names no label"):
+        sample_motions(run, ",", 2, 0, tmp_path / "a")
     with pytest.raises(InputError, match="--count must be 1 or more"):
         sample_motions(run, "walk", 0, 0, tmp_path / "a")
     with pytest.raises(InputError, match="--seed must be 0 or more"):

@@ -352,7 +352,10 @@ def format_motion_evaluation(e: dict) -> str:
 def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str | Path, *,
                    device: str = "cpu", frames: int | None = None, latent: str = "posterior") -> list[Path]:
     """``count`` new motions of ``label`` from a trained generator, written into the directory ``out``
-    as the motion library's ``.npz`` (readable by ``drape motion export``); returns the paths."""
+    as the motion library's ``.npz`` (readable by ``drape motion export``); returns the paths.
+    ``label`` may name several labels, comma-separated, or be ``all`` (every label the run learned):
+    the model is loaded once and each label's motions go into ``out/<label>/``, the same files that
+    one call per label with the same seed writes. Every label is checked before anything is written."""
     from datagen.motion.motion import Motion
 
     if count < 1:
@@ -366,19 +369,44 @@ def sample_motions(run: str | Path, label: str, count: int, seed: int, out: str 
         raise InputError(f"--out {out}: the folder {out.parent} does not exist; create it first")
     check_latent(latent)  # before the checkpoint is loaded
     loaded = load_motion(run)
-    poses, trans, fps = sample_sequences(loaded, label, count, seed, device=device, frames=frames, latent=latent)
-    _, meta, ckpt, _ = loaded
-    code = meta["labels"].index(label)
-    out.mkdir(exist_ok=True)
+    _, meta, ckpt, store = loaded
+    many = label == "all" or "," in label
+    if label == "all":
+        counts = train_label_counts(store, len(meta["labels"]))
+        names = [name for name, c in zip(meta["labels"], counts) if c > 0]
+    else:
+        names = [name.strip() for name in label.split(",") if name.strip()]
+        if not names:
+            raise InputError(f"--label {label!r} names no label; give one, several separated by commas, or all")
+    for name in names:  # every label refused before anything is written
+        check_label(loaded, name)
     paths = []
-    for k in range(count):
-        motion = Motion(poses=poses[k], trans=trans[k], fps=fps, label=code, label_name=label,
-                        source={"kind": "generated", "model": KIND, "run": str(Path(run).resolve()),
-                                "checkpoint": ckpt.name, "seed": int(seed), "index": k, "latent": latent})
-        path = out / f"{label}_{seed}_{k:03d}.npz"
-        motion.save_npz(path)
-        paths.append(path)
+    for name in names:
+        poses, trans, fps = sample_sequences(loaded, name, count, seed, device=device, frames=frames, latent=latent)
+        code = meta["labels"].index(name)
+        dest = out / name if many else out
+        dest.mkdir(parents=True, exist_ok=True)
+        for k in range(count):
+            motion = Motion(poses=poses[k], trans=trans[k], fps=fps, label=code, label_name=name,
+                            source={"kind": "generated", "model": KIND, "run": str(Path(run).resolve()),
+                                    "checkpoint": ckpt.name, "seed": int(seed), "index": k, "latent": latent})
+            path = dest / f"{name}_{seed}_{k:03d}.npz"
+            motion.save_npz(path)
+            paths.append(path)
     return paths
+
+
+def check_label(loaded, label: str) -> None:
+    """Refuse, in one line, a label the loaded run was not trained on or saw no training segment of."""
+    _, meta, _, store = loaded
+    labels = meta["labels"]
+    if label not in labels:
+        raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
+    counts = train_label_counts(store, len(labels))
+    if counts[labels.index(label)] == 0:
+        seen = [name for name, c in zip(labels, counts) if c > 0]
+        raise InputError(f"label {label!r} had no training segments in this run (no motion of the store's train "
+                         f"split has it), so the generator cannot make it; it learned: {', '.join(seen)}")
 
 
 @torch.no_grad()
@@ -400,16 +428,10 @@ def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "c
     loaded = load_motion(run) if isinstance(run, (str, Path)) else run
     module, meta, _, _ = loaded
     labels = meta["labels"]
-    if label not in labels:
-        raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
+    check_label(loaded, label)
     if frames is not None and not 1 <= frames <= 100000:
         raise InputError(f"--frames must be between 1 and 100000, got {frames}")
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
-    counts = train_label_counts(loaded[3], len(labels))
-    if counts[labels.index(label)] == 0:
-        seen = [name for name, c in zip(labels, counts) if c > 0]
-        raise InputError(f"label {label!r} had no training segments in this run (no motion of the store's train "
-                         f"split has it), so the generator cannot make it; it learned: {', '.join(seen)}")
     fitted = label_latents(loaded, latent, device=dev)
     module.to(dev)
     g = torch.Generator().manual_seed(int(seed))
