@@ -110,9 +110,9 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     g_rng = torch.Generator().manual_seed(seed)
     for _ in range(steps):
         x, base, b, target = kept[int(torch.randint(len(kept), (1,), generator=g_rng))]
-        T = len(base)
-        pred = module.model(x, target.reshape(1, T, -1)).float()[0].reshape(T, -1, 3)
-        g = pred / module.scale + base
+        raw = module.model(x, target.reshape(1, len(base), -1))
+        g = module.garment(raw, base[None])[0]
+        pred = raw.float()[0].reshape(target.shape)
         closest, normal = body_contact(g.detach(), b, faces)
         loss = collision_loss(g, closest, normal, margin) * module.scale + keep_weight * torch.nn.functional.mse_loss(
             pred, target)

@@ -196,15 +196,17 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
     module.to(dev)
     g = int(meta["template"])
-    faces = torch.as_tensor(np.asarray(store.garment(g)["faces"], dtype=np.int64), device=dev)
-    edges = torch.as_tensor(template_edges(store.garment(g)["faces"]), device=dev)
+    template = store.garment(g)
+    faces = torch.as_tensor(np.asarray(template["faces"], dtype=np.int64), device=dev)
+    edges = torch.as_tensor(template_edges(template["faces"]), device=dev)
     ds = _segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
     from datagen.geometry.rotations import axis_angle_to_matrix
     from training.motion.module import BodyLayer, pose_features
 
-    body = BodyLayer(store.body_model(), 1).to(dev)  # the posed body, for the share of vertices inside it
-    betas = torch.as_tensor(store.betas()[int(store.garment(g)["body"])], dtype=torch.float32, device=dev)
-    body_faces = torch.as_tensor(np.asarray(store.body_model()["faces"], dtype=np.int64), device=dev)
+    body_model = store.body_model()
+    body = BodyLayer(body_model, 1).to(dev)  # the posed body, for the share of vertices inside it
+    betas = torch.as_tensor(store.betas()[int(template["body"])], dtype=torch.float32, device=dev)
+    body_faces = torch.as_tensor(np.asarray(body_model["faces"], dtype=np.int64), device=dev)
     sums = {f"{who}_{k}": 0.0 for who in ("model", "skinned") for k in ("sq", "hausdorff", "sted", "cosine", "inside")}
     sums["simulated_inside"] = 0.0
     counts = {"values": 0, "frames": 0, "segments": 0}
@@ -238,7 +240,7 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
                      "sted": sums[f"{who}_sted"] / counts["segments"],
                      "normal_cosine": sums[f"{who}_cosine"] / counts["frames"],
                      "inside_share": sums[f"{who}_inside"] / counts["frames"]}
-    garment = store.attrs["garment_type_names"][int(store.garment(g)["type"])]
+    garment = store.attrs["garment_type_names"][int(template["type"])]
     return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "garment": garment, "template": g,
             "segments": counts["segments"], "frames": counts["frames"], "bos": meta["config"]["bos"],
             "relative_to": module.relative_to,
