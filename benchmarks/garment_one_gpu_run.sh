@@ -16,8 +16,9 @@
 # GARMENTS=skirt DEV=cpu MAXMIN=0.3 GEN_MINUTES=0.3).
 # Everything persistent lives in W (default /tmp/p27); each part's logs come back as $OUT/part$PART.tgz
 # (the device tool returns at most eight files), the clothed samples' GIFs beside it.
-# Run so far: PART=1 on an H100 (2026-11-27, eighth session): 252 scenes in 544 s, 223 pass, 98.3 garment-frames/s
-# end to end, valid. PARTs 2 and 3 have not run yet: the machine went back before PART=2 and the store with it.
+# Runs: PART=1 on an H100 (2026-11-27, eighth session): 252 scenes in 544 s, 223 pass, 98.3 garment-frames/s
+# end to end, valid; the machine went back before PART=2. PART=all then poll x3 on an H200 (ninth session): all three
+# parts in 25.7 minutes with the generator beside them (docs/bench/garment_one_h200_20261127m/).
 set -o pipefail
 OUT=${OUT:?}; PART=${PART:?}; W=${W:-/tmp/p27}; STORE=$W/paper-motion.zarr; RUNS=$W/runs; EV=$W/eval
 mkdir -p "$OUT" "$W" "$RUNS" "$EV"
