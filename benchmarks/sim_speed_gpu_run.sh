@@ -11,14 +11,15 @@
 #   OUT=/tmp/o PHASE=six bash ...   the six 300-frame runs at the production settings (RUNS=...)
 #   PHASE=figures bash ... (under setsid)   issue 25's table in the background, one run after the other on an
 #       otherwise idle card: the throughput at 1, 16, 64 and 256 scenes with self-collision on and off, then
-#       Newton's VBD beside drape at 64 and 256 scenes, on and off; logs in W (default /tmp/s25); then
+#       Newton's VBD beside drape at 64 and 256 scenes, on and off (NEWTON=0: not); BATCHES=1,16: other batch
+#       sizes; PROFILE=1,64: the profile at those batch sizes too; logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
 set -o pipefail
 OUT=${OUT:-/tmp/speed-out}; PHASE=${PHASE:-profile}
 SIM_INPUTS=${SIM_INPUTS:-.simbench/sim_inputs.npz}; NEWTON_RUNS=${NEWTON_RUNS:-.simbench/newton_runs.pkl}
 RUNS=${RUNS:-.simbench/runs.pkl}
 mkdir -p "$OUT"
-filter() { grep --line-buffered -v "^Module\|^Warp\|^   \|CUDA Toolkit\|Devices:\|Kernel cache"; }
+filter() { grep --line-buffered -v "^Module\|^Warp\|^   [^ 0-9]\|CUDA Toolkit\|Devices:\|Kernel cache"; }  # keeps table rows (spaces, then digits)
 case "$PHASE" in
 profile)
   for skip in true false; do
@@ -39,15 +40,17 @@ six)
 figures)
   W=${W:-/tmp/s25}; mkdir -p "$W"; : > "$W/progress"
   echo "$(date +%T) throughput starts" >> "$W/progress"
-  python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches 1,16,64,256 --self on,off 2>&1 \
+  python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off 2>&1 \
     | filter > "$W/throughput.txt"; echo "$(date +%T) throughput exit $?" >> "$W/progress"
-  python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda --batches 64,256 \
-    --self on,off --frames 40 2>&1 | filter > "$W/newton.txt"; echo "$(date +%T) newton exit $?" >> "$W/progress"
+  [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
+    --self on --frames 3 --top 12 2>&1 | filter > "$W/profile.txt"; echo "$(date +%T) profile exit $?" >> "$W/progress"; }
+  [ "${NEWTON:-1}" = 1 ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda \
+    --batches 64,256 --self on,off --frames 40 2>&1 | filter > "$W/newton.txt"; echo "$(date +%T) newton exit $?" >> "$W/progress"; }
   touch "$W/done" ;;
 poll)
   W=${W:-/tmp/s25}; t0=$SECONDS
   while [ ! -f "$W/done" ] && [ $((SECONDS - t0)) -lt "${WAIT:-540}" ]; do sleep 5; done
-  cat "$W/progress"; for f in "$W"/throughput.txt "$W"/newton.txt; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
+  cat "$W/progress"; for f in "$W"/throughput.txt "$W"/profile.txt "$W"/newton.txt; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
   cp "$W"/*.txt "$W/progress" "$OUT/" 2>/dev/null ;;
 *) echo "PHASE must be profile, paper-motion, six, figures or poll" >&2; exit 2 ;;
 esac
