@@ -65,7 +65,7 @@ all)  # the three parts one after the other in a process session of their own (s
   # for the next command; beside them, from the start, the motion generator on a motions-only store MO
   # (benchmarks/configs/paper_motion_motions_only.yaml, made on a CPU and carried) for GEN_MINUTES, at the
   # settings of the longest generator run (benchmarks/configs/motion_paper_long.yaml). Then call PART=poll.
-  MO=${MO:?a motions-only store}; : > "$W/progress"
+  MO=${MO:?a motions-only store}; : > "$W/progress"; rm -f "$W/done"
   ( $D train motion --data "$MO" --out "$RUNS/motion" --config benchmarks/configs/motion_paper_long.yaml --device ${DEV:-cuda} \
       --force --max-minutes "${GEN_MINUTES:-14}" > "$EV/train_motion.log" 2>&1; echo "$(date +%T) generator exit $?" >> "$W/progress" ) &
   for p in 1 2 3; do

@@ -38,7 +38,7 @@ six)
   python benchmarks/bench_sim.py run-scenes --inputs "$RUNS" --device cuda 2>&1 | filter \
     | grep --line-buffered -v "frame [0-9]*/" | tee "$OUT/six_runs.txt" ;;
 figures)
-  W=${W:-/tmp/s25}; mkdir -p "$W"; : > "$W/progress"
+  W=${W:-/tmp/s25}; mkdir -p "$W"; : > "$W/progress"; rm -f "$W/done"  # a poll waits for this run, not an earlier one
   echo "$(date +%T) throughput starts" >> "$W/progress"
   python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off 2>&1 \
     | filter > "$W/throughput.txt"; echo "$(date +%T) throughput exit $?" >> "$W/progress"
