@@ -110,10 +110,16 @@ def register(sub, formatter) -> None:
                             "motion file: a drape, AMASS-imported or BVH-imported .npz), the garment predicted for it "
                             "by the garment regressor, body and garment written as one USD animation (checked by "
                             "usd-core's validator) and optionally a video.",
-                            epilog="examples:\n  drape sample clothed --motion-model runs/motion --garment-model "
-                            "runs/skirt --label dance_disco --seed 0 --out anim.usd --video clip.mp4\n"
+                            epilog="examples:\n  drape sample clothed runs --garment skirt --label dance_disco --seed 0 "
+                            "--out anim.usd --video clip.mp4\n"
+                            "  drape sample clothed --motion-model runs/motion --garment-model runs/skirt --label walk "
+                            "--out walk.usd\n"
                             "  drape sample clothed --garment-model runs/skirt --motion walk.npz --out walk.usd")
-    c.add_argument("--garment-model", required=True, help="a run directory of `drape train garment`")
+    c.add_argument("runs", nargs="?", default=None,
+                   help="a folder of runs: the motion generator and the garment regressors (a refined run is "
+                        "preferred); or name the runs with --garment-model and --motion-model")
+    c.add_argument("--garment", default=None, help="the garment type to dress (with RUNS; e.g. skirt, tshirt, pants)")
+    c.add_argument("--garment-model", default=None, help="a run directory of `drape train garment`")
     c.add_argument("--motion-model", default=None, help="a run directory of `drape train motion` (with --label)")
     c.add_argument("--label", default=None, help="the motion's label (sampled from --motion-model)")
     c.add_argument("--motion", default=None, help="a motion .npz to dress instead of a sampled one")
@@ -244,7 +250,7 @@ def _cmd_sample_clothed(args) -> int:
     from datagen.errors import InputError
     from datagen.export.animation import Animation
     from datagen.export.usd import usd_validation_errors
-    from training.garment.run import dress_motion
+    from training.garment.run import clothed_runs, dress_motion
 
     out = Path(args.out)
     if out.suffix.lower() not in (".usd", ".usda", ".usdc"):
@@ -256,8 +262,10 @@ def _cmd_sample_clothed(args) -> int:
         raise InputError(f"--video {args.video}: write a .mp4 or .gif")
     if args.seed < 0:
         raise InputError(f"--seed must be 0 or more, got {args.seed}")
+    garment_run, motion_run = clothed_runs(args.runs, args.garment, garment_run=args.garment_model,
+                                           motion_run=args.motion_model, need_motion=args.motion is None)
     t0 = time.perf_counter()
-    d = dress_motion(args.garment_model, motion_run=args.motion_model, label=args.label, motion_file=args.motion,
+    d = dress_motion(garment_run, motion_run=motion_run, label=args.label, motion_file=args.motion,
                      seed=args.seed, device=args.device, push_out_margin=None if args.no_push_out else 0.002,
                      latent=args.latent)
     anim = Animation(body_vertices=d["body_vertices"].astype("float32"), body_faces=d["body_faces"],

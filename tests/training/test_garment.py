@@ -178,6 +178,17 @@ def test_a_sampled_motion_is_dressed_into_one_valid_usd(motion_store, garment_ru
     assert "usd-core's validator: ok" in printed and out.is_file() and gif.is_file()
     text = out.read_text()
     assert text.count("point3f[] points.timeSamples") >= 2  # body and garment, animated
+    runs = tmp_path / "runs"  # the issue's form: a folder of runs and a garment type
+    runs.mkdir()
+    (runs / "motion").symlink_to(motion_run)
+    (runs / "skirt").symlink_to(run)
+    out3 = tmp_path / "folder.usda"
+    assert main(["sample", "clothed", str(runs), "--garment", "skirt", "--label", "walk", "--seed", "0",
+                 "--out", str(out3)]) == 0 and out3.is_file()
+    assert main(["sample", "clothed", str(runs), "--garment", "tshirt", "--label", "walk", "--out",
+                 str(tmp_path / "y.usda")]) == 2
+    assert "no regressor for 'tshirt'; it has regressors for skirt (skirt)" in capsys.readouterr().err
+    assert not (tmp_path / "y.usda").exists()
     files = tmp_path / "gen"
     assert main(["sample", "motion", str(motion_run), "--label", "walk", "--count", "1", "--out", str(files)]) == 0
     motion_file = next(files.glob("*.npz"))
@@ -353,3 +364,45 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
                   device="cpu")
     e = evaluate_garment(paper, split="test", device="cpu")
     assert e["relative_to"] == "translation" and all(np.isfinite(v) for v in e["model"].values())
+
+
+def test_clothed_runs_are_found_in_a_folder_of_runs(tmp_path):
+    """`drape sample clothed RUNS --garment T` (the issue's form): the regressor for T (its refined
+    run where there is one) and the folder's generator; every miss or ambiguity is one line that
+    lists what the folder holds."""
+    from training.garment.run import clothed_runs
+
+    def run(name, **meta):
+        d = tmp_path / "runs" / name
+        d.mkdir(parents=True)
+        (d / "run.json").write_text(json.dumps(meta))
+        return d
+
+    motion = run("motion", kind="motion")
+    skirt = run("skirt_s1", kind="garment", config={"garment": "skirt"})
+    pants = run("pants_s3", kind="garment", config={"garment": "pants"})
+    folder = tmp_path / "runs"
+    assert clothed_runs(folder, "skirt") == (skirt, motion)
+    assert clothed_runs(folder, "pants", need_motion=False) == (pants, None)
+    with pytest.raises(InputError, match=r"no regressor for 'dress'; it has regressors for pants \(pants_s3\), "
+                                         r"skirt \(skirt_s1\)"):
+        clothed_runs(folder, "dress")
+    with pytest.raises(InputError, match="give --garment: .* has regressors for pants"):
+        clothed_runs(folder, None)
+    refined = run("skirt_s1_refined", kind="garment", config={"garment": "skirt"}, refined_from=str(skirt))
+    assert clothed_runs(folder, "skirt")[0] == refined  # the refined run is preferred
+    run("skirt_s3_refined", kind="garment", config={"garment": "skirt"}, refined_from=str(skirt))
+    with pytest.raises(InputError, match="several regressors for skirt .*name one with --garment-model"):
+        clothed_runs(folder, "skirt")
+    assert clothed_runs(folder, "skirt", garment_run=skirt) == (skirt, motion)
+    with pytest.raises(InputError, match="--garment pants: .* is a regressor for skirt"):
+        clothed_runs(None, "pants", garment_run=skirt)
+    run("motion_b", kind="motion")
+    with pytest.raises(InputError, match=r"several motion-generator runs \(motion, motion_b\); name one"):
+        clothed_runs(folder, "pants")
+    with pytest.raises(InputError, match="is itself a run"):
+        clothed_runs(skirt, "skirt")
+    with pytest.raises(InputError, match="not a folder of runs"):
+        clothed_runs(tmp_path / "nowhere", "skirt")
+    with pytest.raises(InputError, match="name the runs"):
+        clothed_runs(None, "skirt")

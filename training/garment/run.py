@@ -267,6 +267,69 @@ def format_garment_evaluation(e: dict) -> str:
 
 
 @torch.no_grad()
+def clothed_runs(folder: str | Path | None, garment: str | None, *, garment_run: str | Path | None = None,
+                 motion_run: str | Path | None = None, need_motion: bool = True) -> tuple[Path, Path | None]:
+    """The (regressor, generator) runs ``drape sample clothed`` uses: given explicitly, or found in
+    ``folder``, a folder of runs (the generator and one or more regressors per garment type, as the
+    GPU scripts leave them). In a folder, the regressor for ``garment`` is its refined run where
+    there is exactly one, else its only run; the generator is the folder's only motion run. Each
+    ambiguity and each miss is one line that names what the folder holds."""
+    from training.loop import RUN_FILE
+
+    if folder is None and garment_run is None:
+        raise InputError("name the runs: a folder of runs (drape sample clothed RUNS --garment skirt ...) or "
+                         "--garment-model RUN")
+    found: dict[str, list[tuple[Path, dict]]] = {"garment": [], "motion": []}
+    if folder is not None:
+        folder = Path(folder)
+        if not folder.is_dir():
+            raise InputError(f"{folder} is not a folder of runs (no such directory)")
+        if (folder / RUN_FILE).is_file():
+            kind = json.loads((folder / RUN_FILE).read_text()).get("kind")
+            raise InputError(f"{folder} is itself a run ({kind}), not a folder of runs: give the folder that holds "
+                             "the generator and the regressors, or --garment-model RUN and --motion-model RUN")
+        for sub in sorted(p for p in folder.iterdir() if (p / RUN_FILE).is_file()):
+            meta = json.loads((sub / RUN_FILE).read_text())
+            if meta.get("kind") in found:
+                found[meta["kind"]].append((sub, meta))
+    if garment_run is None:
+        by_type: dict[str, list[tuple[Path, dict]]] = {}
+        for sub, meta in found["garment"]:
+            by_type.setdefault(str(meta.get("config", {}).get("garment", "skirt")), []).append((sub, meta))
+        trained = ", ".join(f"{g} ({', '.join(p.name for p, _ in runs)})" for g, runs in sorted(by_type.items()))
+        if not by_type:
+            raise InputError(f"{folder} holds no garment-regressor run; train one with drape train garment, or "
+                             "give --garment-model RUN")
+        if garment is None:
+            if len(by_type) > 1:
+                raise InputError(f"give --garment: {folder} has regressors for {trained}")
+            garment = next(iter(by_type))
+        if garment not in by_type:
+            raise InputError(f"{folder} has no regressor for {garment!r}; it has regressors for {trained}")
+        runs = by_type[garment]
+        refined = [p for p, meta in runs if meta.get("refined_from")]
+        if len(refined) == 1:
+            garment_run = refined[0]
+        elif len(runs) == 1:
+            garment_run = runs[0][0]
+        else:
+            raise InputError(f"{folder} has several regressors for {garment} ({', '.join(p.name for p, _ in runs)}); "
+                             "name one with --garment-model RUN")
+    elif garment is not None:
+        meta = json.loads((Path(garment_run) / RUN_FILE).read_text()) if (Path(garment_run) / RUN_FILE).is_file() else {}
+        has = meta.get("config", {}).get("garment", "skirt")
+        if meta.get("kind") == KIND and has != garment:
+            raise InputError(f"--garment {garment}: {garment_run} is a regressor for {has}")
+    if motion_run is None and need_motion and folder is not None:
+        motions = [p for p, _ in found["motion"]]
+        if len(motions) != 1:
+            raise InputError(f"{folder} holds {'no' if not motions else 'several'} motion-generator runs"
+                             f"{'' if not motions else ' (' + ', '.join(p.name for p in motions) + ')'}; "
+                             "name one with --motion-model RUN")
+        motion_run = motions[0]
+    return Path(garment_run), (Path(motion_run) if motion_run is not None else None)
+
+
 def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = None, label: str | None = None,
                  motion_file: str | Path | None = None, seed: int = 0, device: str = "cpu",
                  push_out_margin: float | None = 0.002, latent: str = "posterior") -> dict[str, Any]:
