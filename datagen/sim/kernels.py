@@ -248,7 +248,8 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
                         parts: int, travel: wp.array2d(dtype=float), box_lo: wp.array2d(dtype=wp.vec3),
                         box_hi: wp.array2d(dtype=wp.vec3), check_x: wp.array(dtype=wp.vec3),
                         check_travel: wp.array2d(dtype=float),
-                        check_bound: wp.array2d(dtype=float), skipped: wp.array(dtype=wp.int32), skip_tests: int):
+                        check_bound: wp.array2d(dtype=float), skipped: wp.array(dtype=wp.int32), skip_tests: int,
+                        accuracy: float):
     """Hard non-penetration at the end of a substep: a vertex inside the body (winding number, the
     same test as the penetration metric) moves to its closest body point plus half its contact
     radius along the face normal, and loses the velocity with which it moved into the body relative
@@ -264,7 +265,8 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
     The first pass skips a vertex that cannot have entered the body since its last test (see
     :func:`may_have_entered`): ``check_*`` hold where that test found it outside (relative to the
     scene's reference body vertex) and how far from each body part (``check_bound`` 0: test it);
-    ``skipped`` marks the vertices skipped this pass."""
+    ``skipped`` marks the vertices skipped this pass. ``accuracy``: the winding number's β
+    (``SolverConfig.projection_accuracy``)."""
     i = wp.tid()
     if again == 0:
         inside[i] = 0
@@ -283,7 +285,7 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
             skipped[i] = 1
             return
     mesh = body_meshes[s]
-    q = wp.mesh_query_point_sign_winding_number(mesh, x[i], query, 2.0, 0.5)
+    q = wp.mesh_query_point_sign_winding_number(mesh, x[i], query, accuracy, 0.5)
     check_bound[i, 0] = 0.0
     if not q.result:
         return
@@ -306,7 +308,7 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
         # behind its closest face: out along the face normal, if that is outside (in a crease
         # between two faces, e.g. the crotch or an armpit, it can land under the other face)
         cand = p + n * (0.5 * r)
-        qn = wp.mesh_query_point_sign_winding_number(mesh, cand, query, 2.0, 0.5)
+        qn = wp.mesh_query_point_sign_winding_number(mesh, cand, query, accuracy, 0.5)
         if (not qn.result) or qn.sign > 0.0:
             x[i] = cand
             found = 1
@@ -330,7 +332,7 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
                             dx = float((k + 1) // 9) - 1.0
                         d = wp.normalize(wp.vec3(dx, dy, dz))
                         cand = x[i] + d * t
-                        qc = wp.mesh_query_point_sign_winding_number(mesh, cand, query, 2.0, 0.5)
+                        qc = wp.mesh_query_point_sign_winding_number(mesh, cand, query, accuracy, 0.5)
                         if (not qc.result) or qc.sign > 0.0:
                             x[i] = cand
                             n = d

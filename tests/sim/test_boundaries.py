@@ -47,3 +47,14 @@ def test_failures_are_typed_and_every_code_has_a_store_code():
     assert str(Failure("slip", "3 cm")) == "slip: 3 cm"
     with pytest.raises(ValueError, match="not one of"):
         Failure("torn", "a code the store does not know")
+
+
+def test_the_projection_accuracy_below_one_is_refused():
+    """Below β = 1 warp's winding number breaks (benchmarks/winding_accuracy_probe.py: at 0.75 a
+    fifth of the inside-or-out answers differ from β = 2's), so the solver refuses it in one line."""
+    from datagen.sim.solver import SolverConfig
+
+    assert SolverConfig().projection_accuracy == 1.25
+    assert SolverConfig(projection_accuracy=1.0).projection_accuracy == 1.0
+    with pytest.raises(InputError, match="projection_accuracy must be >= 1, got 0.75"):
+        SolverConfig(projection_accuracy=0.75)
