@@ -253,15 +253,20 @@ def divergence_note(result: dict[str, Any], precision: str) -> str | None:
             f"the config" + (", or train with precision: \"32\"" if precision != "32" else "") + ", and --force a new run")
 
 
+def run_meta(run: str | Path) -> dict | None:
+    """The run.json of a run directory, or None where ``run`` is not one."""
+    path = Path(run) / RUN_FILE
+    return json.loads(path.read_text()) if path.is_file() else None
+
+
 def run_checkpoint(run: str | Path, kind: str, model: str, *, checkpoint: str = "best") -> tuple[dict, Path]:
     """(run.json, checkpoint path) of a run directory of model ``kind``, the ``checkpoint``
     (``best``, else ``last``); one-line errors for a directory that is not a run, a run of another
     model (``model`` names the expected one) and a run without a checkpoint."""
     run = Path(run)
-    meta_path = run / RUN_FILE
-    if not meta_path.is_file():
+    meta = run_meta(run)
+    if meta is None:
         raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
-    meta = json.loads(meta_path.read_text())
     if meta.get("kind") != kind:
         raise InputError(f"{run} holds a {meta.get('kind')!r} model, not {model} ({kind!r})")
     path = run / "checkpoints" / f"{checkpoint}.ckpt"

@@ -292,10 +292,9 @@ def _cmd_sample_clothed(args) -> int:
 
 
 def _run_kind(run: str) -> str | None:
-    from training.loop import RUN_FILE
+    from training.loop import run_meta
 
-    f = Path(run) / RUN_FILE
-    return json.loads(f.read_text()).get("kind") if f.is_file() else None
+    return (run_meta(run) or {}).get("kind")
 
 
 def _cmd_evaluate(args) -> int:

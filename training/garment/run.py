@@ -266,7 +266,11 @@ def format_garment_evaluation(e: dict) -> str:
     return "\n".join(lines)
 
 
-@torch.no_grad()
+def _garment_of(meta: dict) -> str:
+    """The garment type a regressor run was trained on (its config's; runs from before the field: skirt)."""
+    return str(meta.get("config", {}).get("garment", "skirt"))
+
+
 def clothed_runs(folder: str | Path | None, garment: str | None, *, garment_run: str | Path | None = None,
                  motion_run: str | Path | None = None, need_motion: bool = True) -> tuple[Path, Path | None]:
     """The (regressor, generator) runs ``drape sample clothed`` uses: given explicitly, or found in
@@ -274,7 +278,7 @@ def clothed_runs(folder: str | Path | None, garment: str | None, *, garment_run:
     GPU scripts leave them). In a folder, the regressor for ``garment`` is its refined run where
     there is exactly one, else its only run; the generator is the folder's only motion run. Each
     ambiguity and each miss is one line that names what the folder holds."""
-    from training.loop import RUN_FILE
+    from training.loop import run_meta
 
     if folder is None and garment_run is None:
         raise InputError("name the runs: a folder of runs (drape sample clothed RUNS --garment skirt ...) or "
@@ -284,18 +288,17 @@ def clothed_runs(folder: str | Path | None, garment: str | None, *, garment_run:
         folder = Path(folder)
         if not folder.is_dir():
             raise InputError(f"{folder} is not a folder of runs (no such directory)")
-        if (folder / RUN_FILE).is_file():
-            kind = json.loads((folder / RUN_FILE).read_text()).get("kind")
-            raise InputError(f"{folder} is itself a run ({kind}), not a folder of runs: give the folder that holds "
-                             "the generator and the regressors, or --garment-model RUN and --motion-model RUN")
-        for sub in sorted(p for p in folder.iterdir() if (p / RUN_FILE).is_file()):
-            meta = json.loads((sub / RUN_FILE).read_text())
-            if meta.get("kind") in found:
+        if (own := run_meta(folder)) is not None:
+            raise InputError(f"{folder} is itself a run ({own.get('kind')}), not a folder of runs: give the folder "
+                             "that holds the generator and the regressors, or --garment-model RUN and --motion-model RUN")
+        for sub in sorted(folder.iterdir()):
+            meta = run_meta(sub)
+            if meta is not None and meta.get("kind") in found:
                 found[meta["kind"]].append((sub, meta))
     if garment_run is None:
         by_type: dict[str, list[tuple[Path, dict]]] = {}
         for sub, meta in found["garment"]:
-            by_type.setdefault(str(meta.get("config", {}).get("garment", "skirt")), []).append((sub, meta))
+            by_type.setdefault(_garment_of(meta), []).append((sub, meta))
         trained = ", ".join(f"{g} ({', '.join(p.name for p, _ in runs)})" for g, runs in sorted(by_type.items()))
         if not by_type:
             raise InputError(f"{folder} holds no garment-regressor run; train one with drape train garment, or "
@@ -316,10 +319,9 @@ def clothed_runs(folder: str | Path | None, garment: str | None, *, garment_run:
             raise InputError(f"{folder} has several regressors for {garment} ({', '.join(p.name for p, _ in runs)}); "
                              "name one with --garment-model RUN")
     elif garment is not None:
-        meta = json.loads((Path(garment_run) / RUN_FILE).read_text()) if (Path(garment_run) / RUN_FILE).is_file() else {}
-        has = meta.get("config", {}).get("garment", "skirt")
-        if meta.get("kind") == KIND and has != garment:
-            raise InputError(f"--garment {garment}: {garment_run} is a regressor for {has}")
+        meta = run_meta(garment_run) or {}
+        if meta.get("kind") == KIND and _garment_of(meta) != garment:
+            raise InputError(f"--garment {garment}: {garment_run} is a regressor for {_garment_of(meta)}")
     if motion_run is None and need_motion and folder is not None:
         motions = [p for p, _ in found["motion"]]
         if len(motions) != 1:
@@ -330,6 +332,7 @@ def clothed_runs(folder: str | Path | None, garment: str | None, *, garment_run:
     return Path(garment_run), (Path(motion_run) if motion_run is not None else None)
 
 
+@torch.no_grad()
 def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = None, label: str | None = None,
                  motion_file: str | Path | None = None, seed: int = 0, device: str = "cpu",
                  push_out_margin: float | None = 0.002, latent: str = "posterior") -> dict[str, Any]:
