@@ -23,8 +23,8 @@ vertex's 3x3). The matrix is applied element by element, never assembled.
 
 No float sum depends on the order in which threads run: each element writes its share of a product
 at its corners and every vertex gathers its own faces' and hinges' shares in its fixed incidence
-order (:func:`gather_product`); the per-scene dot products are summed in chunks of the scene's own
-vertices, then the chunks in order (:func:`chunk_dot`, :func:`scene_sum`). So a GPU run repeats
+order (:func:`gather_product`); the per-scene dot products are summed by one block of threads per
+scene in a fixed order (:func:`scene_dot`). So a GPU run repeats
 bitwise, and a scene's result is the same in any batch and on any number of GPUs.
 
 Every scene of a batch has its own scalars (the products and step lengths of its own
@@ -326,27 +326,25 @@ def cg_start(force: wp.array(dtype=wp.vec3), inverse: wp.array(dtype=wp.mat33), 
     d[i] = wp.vec3(0.0)
 
 
+DOT_LANES = 256
+"""Threads per scene of :func:`scene_dot` on a GPU (warp's default block, so the module is compiled
+once for it and for the one-thread-per-item kernels)."""
+
+
 @wp.kernel
-def chunk_dot(a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), chunks: wp.array2d(dtype=wp.int32),
+def scene_dot(a: wp.array(dtype=wp.vec3), b: wp.array(dtype=wp.vec3), particle_range: wp.array2d(dtype=wp.int32),
               out: wp.array(dtype=wp.float64)):
-    """Σ a·b over each chunk of one scene's vertices, in vertex order (float64)."""
-    c = wp.tid()
+    """Σ a·b over each scene's vertices (float64), one block per scene (``wp.launch_tiled``): lane
+    ``l`` sums the vertices ``p0 + l, p0 + l + lanes, ...`` in order, and ``wp.tile_sum`` adds the
+    lanes in a fixed tree. The order is fixed by the scene's own vertices and the block size, so it
+    is the same in every run and in every batch (on a CPU a block is one thread: vertex order)."""
+    s, lane = wp.tid()
     acc = wp.float64(0.0)
-    for i in range(chunks[c, 0], chunks[c, 1]):
+    for i in range(particle_range[s, 0] + lane, particle_range[s, 1], wp.block_dim()):
         acc += wp.float64(wp.dot(a[i], b[i]))
-    out[c] = acc
-
-
-@wp.kernel
-def scene_sum(chunk_sum: wp.array(dtype=wp.float64), scene_chunks: wp.array2d(dtype=wp.int32),
-              out: wp.array(dtype=wp.float64)):
-    """Each scene's sum of its chunks, in chunk order: the reduction's order is fixed by the scene's
-    own vertices, so it is the same in every run and in every batch."""
-    s = wp.tid()
-    acc = wp.float64(0.0)
-    for c in range(scene_chunks[s, 0], scene_chunks[s, 1]):
-        acc += chunk_sum[c]
-    out[s] = acc
+    total = wp.tile_sum(wp.tile(acc))
+    if lane == 0:
+        out[s] = total[0]
 
 
 @wp.kernel

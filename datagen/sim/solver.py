@@ -218,23 +218,6 @@ GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
 REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
 
-GLOBAL_REDUCTION_CHUNK = 128
-"""Vertices per partial sum of the global step's per-scene dot products."""
-
-
-def _reduction_chunks(particle_range: np.ndarray, size: int) -> tuple[np.ndarray, np.ndarray]:
-    """Chunks [first, end) of at most ``size`` vertices inside each scene's range, [C, 2], and each
-    scene's chunks [first, end), [S, 2]: a scene's sums are cut where its own vertices say, whatever
-    its place in the batch."""
-    chunks, scene_chunks = [], []
-    for p0, p1 in np.asarray(particle_range, dtype=np.int64):
-        first = len(chunks)
-        chunks += [(a, min(a + size, int(p1))) for a in range(int(p0), int(p1), size)]
-        scene_chunks.append((first, len(chunks)))
-    return (np.asarray(chunks, dtype=np.int32).reshape(-1, 2),
-            np.asarray(scene_chunks, dtype=np.int32).reshape(-1, 2))
-
-
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
@@ -251,10 +234,11 @@ class SolverVBD:
 
         from datagen.sim import detection_kernels as D
         from datagen.sim import kernels as K
+        from datagen.sim import sweep_kernels as S
 
         self.model = model
         self.config = config or SolverConfig()
-        self.K, self.D = K, D
+        self.K, self.D, self.S = K, D, S
         m = model
         n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
         with wp.ScopedDevice(m.device):
@@ -274,11 +258,8 @@ class SolverVBD:
                 # each element's share of a product at its corners, gathered per vertex
                 self.cg_face_part = wp.zeros((nf, 3), dtype=wp.vec3)
                 self.cg_edge_part = wp.zeros((ne, 4), dtype=wp.vec3)
-                # per-scene dot products: chunks of each scene's own vertices, summed in order
-                chunks, scene_chunks = _reduction_chunks(m.host.particle_range, GLOBAL_REDUCTION_CHUNK)
-                self.cg_chunks = wp.array(chunks, dtype=wp.int32)
-                self.cg_scene_chunks = wp.array(scene_chunks, dtype=wp.int32)
-                self.cg_chunk_sum = wp.zeros(max(len(chunks), 1), dtype=wp.float64)
+                self.particle_range = wp.array(np.asarray(m.host.particle_range, dtype=np.int32).reshape(-1, 2),
+                                               dtype=wp.int32)  # each scene's vertices, for its dot products
             P = m.body_part_count
             self.body_lambda = wp.zeros((n, P), dtype=float)
             # copies of what a step carries over from the last besides the state, for a redo
@@ -477,6 +458,7 @@ class SolverVBD:
                 graphs.clear()
             wp.load_module(self.K, device=dev)  # compile before capturing
             wp.load_module(self.D, device=dev)
+            wp.load_module(self.S, device=dev)
             if self.config.global_iterations:
                 from datagen.sim import newton_kernels
 
@@ -567,22 +549,23 @@ class SolverVBD:
                                                  self.cg_diag_el])
         wp.launch(N.invert_blocks, n, inputs=[self.cg_diag_other, self.cg_diag_el, m.active, self.cg_inverse])
         p, q, r, z = self.cg_p, self.cg_q, self.cg_r, self.cg_z
-        chunks, scene_chunks, partial = self.cg_chunks, self.cg_scene_chunks, self.cg_chunk_sum
         rz, rz_new = self.cg_rz, self.cg_rz_new
+        ranges, scenes = self.particle_range, [m.scene_count]
+
+        def dot(a, b, out):
+            wp.launch_tiled(N.scene_dot, dim=scenes, block_dim=N.DOT_LANES, inputs=[a, b, ranges, out])
+
         wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
-        wp.launch(N.chunk_dot, chunks.shape[0], inputs=[r, z, chunks, partial])
-        wp.launch(N.scene_sum, m.scene_count, inputs=[partial, scene_chunks, rz])
+        dot(r, z, rz)
         for _ in range(c.global_iterations):
             wp.launch(N.membrane_product, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
                                                       p, self.cg_face_part])
             wp.launch(N.bending_product, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, p, self.cg_edge_part])
             wp.launch(N.gather_product, n, inputs=[self.cg_diag_other, p, m.v2f_offsets, m.v2f, m.v2e_offsets,
                                                    m.v2e, self.cg_face_part, self.cg_edge_part, q])
-            wp.launch(N.chunk_dot, chunks.shape[0], inputs=[p, q, chunks, partial])
-            wp.launch(N.scene_sum, m.scene_count, inputs=[partial, scene_chunks, self.cg_pq])
+            dot(p, q, self.cg_pq)
             wp.launch(N.cg_step, n, inputs=[p, q, self.cg_inverse, m.particle_scene, rz, self.cg_pq, self.cg_d, r, z])
-            wp.launch(N.chunk_dot, chunks.shape[0], inputs=[r, z, chunks, partial])
-            wp.launch(N.scene_sum, m.scene_count, inputs=[partial, scene_chunks, rz_new])
+            dot(r, z, rz_new)
             wp.launch(N.cg_direction, n, inputs=[z, m.particle_scene, rz, rz_new, p])
             rz, rz_new = rz_new, rz
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
@@ -590,7 +573,7 @@ class SolverVBD:
     def _step(self, state, control, dt: float) -> None:
         import warp as wp
 
-        K, m, c = self.K, self.model, self.config
+        K, S, m, c = self.K, self.S, self.model, self.config
         n, nb = m.particle_count, m.body_vertex_count
         h = dt / c.substeps
         x, v = state.positions, state.velocities
@@ -645,7 +628,7 @@ class SolverVBD:
                         wp.copy(self.x_nm1, x)
                         omega, cheb = 1.0, 0
                     for col in m.colours:
-                        wp.launch(K.solve_colour, col.shape[0], inputs=[
+                        wp.launch_tiled(S.solve_colour, dim=[col.shape[0]], block_dim=S.SWEEP_LANES, inputs=[
                             col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
                             m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
                             m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
