@@ -139,7 +139,7 @@ PHASES = {  # kernel (or native call) -> phase of a substep (the first key found
     "face_bounds": "cloth-cloth detection", "edge_bounds": "cloth-cloth detection", "bvh_refit": "cloth-cloth detection",
     "detect_vertex_triangle": "cloth-cloth detection", "detect_edge_edge": "cloth-cloth detection",
     "sort_lists": "cloth-cloth detection", "count_needed": "cloth-cloth detection", "finish_bounds": "cloth-cloth detection",
-    "solve_colour": "sweeps", "copy_colour": "sweeps", "chebyshev": "sweeps", "contour_gradients": "untangle", "apply_untangle": "untangle",
+    "solve_colour": "sweeps", "colour_partials": "sweeps", "copy_colour": "sweeps", "chebyshev": "sweeps", "contour_gradients": "untangle", "apply_untangle": "untangle",
 }
 
 
@@ -147,7 +147,7 @@ def _phase(name: str) -> str:
     for key, phase in PHASES.items():
         if key in name:
             return phase
-    if any(k in name for k in ("membrane_product", "bending_product", "gather_product", "chunk_dot", "scene_sum",
+    if any(k in name for k in ("membrane_product", "bending_product", "gather_product", "chunk_dot", "scene_sum", "scene_dot",
                                "cg_", "vertex_force_diagonal", "element_diagonal", "invert_blocks", "apply_step")):
         return "global step"
     if "refit" in name.lower() or "bvh" in name.lower() or "mesh" in name.lower():

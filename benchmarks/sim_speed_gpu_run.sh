@@ -8,12 +8,16 @@
 #   OUT=/tmp/o PHASE=paper-motion bash ...   `drape generate --preset paper-motion --batch-size 252` on one
 #       GPU under `time`, stopped at 585 s (run PHASE=profile first on the same machine: it compiles the
 #       kernels), with nvidia-smi sampled every 10 s
-#   OUT=/tmp/o PHASE=six bash ...   the six 300-frame runs at the production settings (RUNS=...)
+#   OUT=/tmp/o PHASE=six bash ...   the six 300-frame runs at the production settings (RUNS=...; SETS as in compare)
 #   PHASE=figures bash ... (under setsid)   issue 25's table in the background, one run after the other on an
 #       otherwise idle card: the throughput at 1, 16, 64 and 256 scenes with self-collision on and off, then
 #       Newton's VBD beside drape at 64 and 256 scenes, on and off (NEWTON=0: not); BATCHES=1,16: other batch
 #       sizes; PROFILE=1,64: the profile at those batch sizes too; logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
+#   OUT=/tmp/o PHASE=compare BASE=.bench_base SETS="- sweep_groups=1" bash ...   the profile at BATCHES (default
+#       64,256), self-collision on, of an earlier tree (BASE: a copy of its datagen/ and benchmarks/, e.g.
+#       `git archive REF datagen benchmarks | tar x -C .bench_base`; none: left out) and of this one at each
+#       of SETS, one after the other on the same card
 set -o pipefail
 OUT=${OUT:-/tmp/speed-out}; PHASE=${PHASE:-profile}
 SIM_INPUTS=${SIM_INPUTS:-.simbench/sim_inputs.npz}; NEWTON_RUNS=${NEWTON_RUNS:-.simbench/newton_runs.pkl}
@@ -34,9 +38,28 @@ paper-motion)
       --device cuda ) > "$OUT/generate_pm.log" 2>&1
   echo "exit $?"; grep -v "^scene \|^Module\|^Warp" "$OUT/generate_pm.log" | tail -30
   grep "set-up of" "$OUT/generate_pm.log" ;;
+compare)
+  # SETS: space-separated variants of this tree, each a comma-separated list of SolverConfig KEY=VALUE
+  # ("-": the defaults); BASE=none leaves the earlier tree out
+  trees=("${BASE:-.bench_base}"); [ "${BASE:-}" = none ] && trees=()
+  for tree in "${trees[@]}"; do
+    ( cd "$tree" && PYTHONPATH="$PWD:$PYTHONPATH" python benchmarks/bench_sim.py profile --inputs "$OLDPWD/$SIM_INPUTS" \
+        --device cuda --batches ${BATCHES:-64,256} --self on --frames 3 --top 14 ) 2>&1 | filter \
+      | tee "$OUT/profile_base.txt" | grep -A16 "^=="
+  done
+  for set in ${SETS:--}; do
+    args=(); [ "$set" != - ] && for kv in ${set//,/ }; do args+=(--set "$kv"); done
+    echo "### this tree, ${set}"
+    python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-64,256} --self on \
+      --frames 3 --top 14 "${args[@]}" 2>&1 | filter | tee "$OUT/profile_this_${set//[=,]/_}.txt" | grep -A16 "^=="
+  done ;;
 six)
-  python benchmarks/bench_sim.py run-scenes --inputs "$RUNS" --device cuda 2>&1 | filter \
-    | grep --line-buffered -v "frame [0-9]*/" | tee "$OUT/six_runs.txt" ;;
+  for set in ${SETS:--}; do  # as in compare: each a comma-separated list of KEY=VALUE, "-": the defaults
+    args=(); [ "$set" != - ] && for kv in ${set//,/ }; do args+=(--set "$kv"); done
+    echo "### six runs, ${set}"
+    python benchmarks/bench_sim.py run-scenes --inputs "$RUNS" --device cuda "${args[@]}" 2>&1 | filter \
+      | grep --line-buffered -v "frame [0-9]*/" | tee "$OUT/six_runs_${set//[=,]/_}.txt"
+  done ;;
 figures)
   W=${W:-/tmp/s25}; mkdir -p "$W"; : > "$W/progress"; rm -f "$W/done"  # a poll waits for this run, not an earlier one
   echo "$(date +%T) throughput starts" >> "$W/progress"
@@ -52,5 +75,5 @@ poll)
   while [ ! -f "$W/done" ] && [ $((SECONDS - t0)) -lt "${WAIT:-540}" ]; do sleep 5; done
   cat "$W/progress"; for f in "$W"/throughput.txt "$W"/profile.txt "$W"/newton.txt; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
   cp "$W"/*.txt "$W/progress" "$OUT/" 2>/dev/null ;;
-*) echo "PHASE must be profile, paper-motion, six, figures or poll" >&2; exit 2 ;;
+*) echo "PHASE must be profile, compare, paper-motion, six, figures or poll" >&2; exit 2 ;;
 esac

@@ -743,13 +743,6 @@ def predict_body_friction(x_prev: wp.array(dtype=wp.vec3), mass: wp.array(dtype=
 
 
 @wp.kernel
-def copy_colour(colour_verts: wp.array(dtype=wp.int32), src: wp.array(dtype=wp.vec3), dst: wp.array(dtype=wp.vec3)):
-    tid = wp.tid()
-    i = colour_verts[tid]
-    dst[i] = src[i]
-
-
-@wp.kernel
 def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2: wp.array(dtype=wp.vec3),
               x_det: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
               omega: float, contacts: wp.array(dtype=wp.int32), skip_contacts: int,

@@ -1,16 +1,22 @@
-"""The sweeps' per-vertex solve with several threads per vertex.
+"""The sweeps' per-vertex solve, its sums split over several threads per vertex.
 
 A vertex's local Newton step sums the forces and Hessians of its faces, hinges, cloth-cloth
-contacts and body planes (:func:`solve_colour`). One thread per vertex does them one after
-another: on a GPU a colour of 64 T-shirts is about 25,000 vertices, a tenth of the threads an H100
-keeps in flight, and each thread's chain of dependent loads sets the launch's time. Here a block
-of :data:`SWEEP_LANES` threads shares one vertex: lane ``l`` takes items ``l, l + lanes, ...`` and
-the lanes' sums are added by ``wp.tile_sum`` in a fixed tree, so the result depends neither on the
-order in which threads run nor on the batch. On a CPU a block is one thread (warp's default), which
-takes every item in order.
+contacts and body planes. One thread per vertex does them one after another: on a GPU a colour of
+64 T-shirts is about 25,000 vertices, a tenth of the threads an H100 keeps in flight, and each
+thread's chain of dependent loads sets the launch's time. So a colour is solved by two launches:
 
-The module's kernels are compiled for blocks of :data:`SWEEP_LANES` threads; launch them with
-``wp.launch_tiled(..., block_dim=SWEEP_LANES)``.
+- :func:`colour_partials`, ``(groups, vertices)`` threads: group ``g`` of a vertex sums its items
+  ``g, g + groups, ...`` (each incident face: membrane, and the contacts of other vertices with that
+  face at this corner; each hinge stencil: bending, and on the edge's own ends its edge-edge
+  contacts; each of its own vertex-triangle contacts; each body part's plane). A warp holds one
+  group of 32 vertices, so its threads take the same kind of item together.
+- :func:`solve_colour_vertices`, one thread per vertex: adds the groups in order, solves the 3x3
+  step, applies friction and the move bound, and writes the vertex (it reads no other vertex, and
+  the partials read every position before it runs, so no copy of the colour is needed).
+
+Every sum has a fixed order, so the result depends neither on thread timing nor on the batch.
+(Blocks of threads sharing a vertex through ``wp.tile_sum`` were tried first: 3.8x slower on an
+H100, each warp then holding one vertex whose threads take different kinds of item.)
 """
 
 from __future__ import annotations
@@ -20,11 +26,6 @@ import warp as wp
 from datagen.sim.detection_kernels import triangle_closest_bary
 from datagen.sim.kernels import (bending_force_hessian, body_stick_slip, contact_force_hessian, friction_limit,
                                  friction_part, membrane_force_hessian, vec5)
-
-SWEEP_LANES = 16
-"""Threads per vertex in :func:`solve_colour` on a GPU."""
-
-wp.set_module_options({"block_dim": SWEEP_LANES})
 
 
 @wp.func
@@ -108,17 +109,12 @@ def vertex_contact(i: int, t: int, x: wp.array(dtype=wp.vec3), x_prev: wp.array(
 
 
 @wp.kernel
-def solve_colour(
+def colour_partials(
     colour_verts: wp.array(dtype=wp.int32),
     x: wp.array(dtype=wp.vec3),
     x_prev: wp.array(dtype=wp.vec3),
-    x_det: wp.array(dtype=wp.vec3),
-    inertia_target: wp.array(dtype=wp.vec3),
-    mass: wp.array(dtype=float),
     active: wp.array(dtype=wp.int32),
-    bound: wp.array(dtype=float),
     damping: wp.array(dtype=float),
-    friction: wp.array(dtype=float),
     faces: wp.array2d(dtype=wp.int32),
     dm_inv: wp.array(dtype=wp.mat22),
     tri_area: wp.array(dtype=float),
@@ -134,9 +130,7 @@ def solve_colour(
     body_has: wp.array2d(dtype=wp.int32),
     body_point: wp.array2d(dtype=wp.vec3),
     body_normal: wp.array2d(dtype=wp.vec3),
-    body_disp: wp.array2d(dtype=wp.vec3),
     body_radius: wp.array(dtype=float),
-    body_lambda: wp.array2d(dtype=float),
     body_k: float,
     vt_count: wp.array(dtype=wp.int32),
     vt_tri: wp.array2d(dtype=wp.int32),
@@ -149,93 +143,115 @@ def solve_colour(
     self_friction: float,
     eps_u: float,
     h: float,
+    part_force: wp.array2d(dtype=wp.vec3),
+    part_hess: wp.array2d(dtype=wp.mat33),
+    part_elastic: wp.array2d(dtype=wp.mat33),
+):
+    """Group ``g``'s share of the force and Hessian of the ``k``-th vertex of a colour: the sum over
+    its items ``g, g + groups, ...`` in order (``groups`` = the launch's first dimension), and of the
+    membrane and bending part alone (``part_elastic``: with inertia, the stiffness friction acts
+    against)."""
+    g, k = wp.tid()
+    groups = part_force.shape[0]
+    i = colour_verts[k]
+    force = wp.vec3(0.0)
+    hess = wp.mat33(0.0)
+    hel = wp.mat33(0.0)
+    if active[i] != 0:
+        xi = x[i]
+        kd = damping[i]
+        f0 = v2f_offsets[i]
+        faces_n = v2f_offsets[i + 1] - f0
+        e0 = v2e_offsets[i]
+        hinges_n = v2e_offsets[i + 1] - e0
+        vt_n = wp.min(vt_count[i], vt_tri.shape[1])
+        r = body_radius[i]
+        for item in range(g, faces_n + hinges_n + vt_n + body_has.shape[1], groups):
+            if item < faces_n:
+                t = v2f[f0 + item, 0]
+                local = v2f[f0 + item, 1]
+                fm, hm = membrane_force_hessian(i, local, t, x, x_prev, faces, dm_inv, tri_area, tri_stiff, tri_lock,
+                                                kd, h)
+                fc, hc = corner_contacts(t, local, x, x_prev, faces, tv_count, tv_vert, self_radius, self_k,
+                                         self_friction, eps_u)
+                force += fm + fc
+                hess += hm + hc
+                hel += hm
+            elif item < faces_n + hinges_n:
+                e = v2e[e0 + item - faces_n, 0]
+                local = v2e[e0 + item - faces_n, 1]
+                if edges[e, 2] >= 0 and edges[e, 3] >= 0:
+                    fb, hb = bending_force_hessian(i, local, e, x, x_prev, edges, rest_angle, bend_k, kd, h)
+                    force += fb
+                    hess += hb
+                    hel += hb
+                if local < 2:
+                    fc, hc = edge_contacts(e, local, x, x_prev, edges, ee_count, ee_edge, self_radius, self_k,
+                                           self_friction, eps_u)
+                    force += fc
+                    hess += hc
+            elif item < faces_n + hinges_n + vt_n:
+                fc, hc = vertex_contact(i, vt_tri[i, item - faces_n - hinges_n], x, x_prev, faces, self_radius,
+                                        self_k, self_friction, eps_u)
+                force += fc
+                hess += hc
+            else:
+                p = item - faces_n - hinges_n - vt_n
+                if body_has[i, p] == 1:
+                    n = body_normal[i, p]
+                    dist = wp.dot(xi - body_point[i, p], n)
+                    if dist < r:
+                        fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0)
+                        force += fc
+                        hess += hc
+    part_force[g, k] = force
+    part_hess[g, k] = hess
+    part_elastic[g, k] = hel
+
+
+@wp.kernel
+def solve_colour_vertices(
+    colour_verts: wp.array(dtype=wp.int32),
+    x: wp.array(dtype=wp.vec3),
+    x_prev: wp.array(dtype=wp.vec3),
+    x_det: wp.array(dtype=wp.vec3),
+    inertia_target: wp.array(dtype=wp.vec3),
+    mass: wp.array(dtype=float),
+    active: wp.array(dtype=wp.int32),
+    bound: wp.array(dtype=float),
+    friction: wp.array(dtype=float),
+    body_has: wp.array2d(dtype=wp.int32),
+    body_normal: wp.array2d(dtype=wp.vec3),
+    body_disp: wp.array2d(dtype=wp.vec3),
+    body_lambda: wp.array2d(dtype=float),
+    h: float,
     vertex_area: wp.array(dtype=float),
     body_friction: int,
     friction_pressure: float,
     friction_used: wp.array(dtype=float),
-    x_out: wp.array(dtype=wp.vec3),
+    part_force: wp.array2d(dtype=wp.vec3),
+    part_hess: wp.array2d(dtype=wp.mat33),
+    part_elastic: wp.array2d(dtype=wp.mat33),
 ):
-    """One Newton step on the local energy of every vertex of one colour (writes ``x_out``), then
-    Coulomb friction with the body on that step (``kernels.body_stick_slip``).
-
-    The vertex's items, shared out over the block's lanes: each incident face (membrane, and the
-    contacts of other vertices with that face at this corner), each incident hinge stencil (bending,
-    and on the edge's own ends its edge-edge contacts), each of its own vertex-triangle contacts,
-    each body part's plane."""
-    tid, lane = wp.tid()
-    lanes = wp.block_dim()
-    i = colour_verts[tid]
+    """One Newton step on the local energy of the ``k``-th vertex of a colour from its groups'
+    partial sums (:func:`colour_partials`), then Coulomb friction with the body on that step
+    (``kernels.body_stick_slip``) and the move bound; writes the vertex in ``x``."""
+    k = wp.tid()
+    i = colour_verts[k]
+    if active[i] == 0:
+        return
     xi = x[i]
-    if active[i] == 0:  # the same for every lane of the block
-        if lane == 0:
-            x_out[i] = xi
-        return
-    kd = damping[i]
-    f0 = v2f_offsets[i]
-    faces_n = v2f_offsets[i + 1] - f0
-    e0 = v2e_offsets[i]
-    hinges_n = v2e_offsets[i + 1] - e0
-    vt_n = wp.min(vt_count[i], vt_tri.shape[1])
-    parts = body_has.shape[1]
-    r = body_radius[i]
-    force = wp.vec3(0.0)
-    hess = wp.mat33(0.0)
-    hel = wp.mat33(0.0)  # membrane and bending: with inertia, the stiffness friction acts against
-    for item in range(lane, faces_n + hinges_n + vt_n + parts, lanes):
-        if item < faces_n:
-            k = f0 + item
-            t = v2f[k, 0]
-            local = v2f[k, 1]
-            fm, hm = membrane_force_hessian(i, local, t, x, x_prev, faces, dm_inv, tri_area, tri_stiff, tri_lock,
-                                            kd, h)
-            fc, hc = corner_contacts(t, local, x, x_prev, faces, tv_count, tv_vert, self_radius, self_k,
-                                     self_friction, eps_u)
-            force += fm + fc
-            hess += hm + hc
-            hel += hm
-        elif item < faces_n + hinges_n:
-            k = e0 + item - faces_n
-            e = v2e[k, 0]
-            local = v2e[k, 1]
-            if edges[e, 2] >= 0 and edges[e, 3] >= 0:
-                fb, hb = bending_force_hessian(i, local, e, x, x_prev, edges, rest_angle, bend_k, kd, h)
-                force += fb
-                hess += hb
-                hel += hb
-            if local < 2:
-                fc, hc = edge_contacts(e, local, x, x_prev, edges, ee_count, ee_edge, self_radius, self_k,
-                                       self_friction, eps_u)
-                force += fc
-                hess += hc
-        elif item < faces_n + hinges_n + vt_n:
-            fc, hc = vertex_contact(i, vt_tri[i, item - faces_n - hinges_n], x, x_prev, faces, self_radius, self_k,
-                                    self_friction, eps_u)
-            force += fc
-            hess += hc
-        else:
-            p = item - faces_n - hinges_n - vt_n
-            if body_has[i, p] == 1:
-                n = body_normal[i, p]
-                dist = wp.dot(xi - body_point[i, p], n)
-                if dist < r:
-                    fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0)
-                    force += fc
-                    hess += hc
-    force_sum = wp.tile_sum(wp.tile(force, preserve_type=True))
-    hess_sum = wp.tile_sum(wp.tile(hess, preserve_type=True))
-    hel_sum = wp.tile_sum(wp.tile(hel, preserve_type=True))
-    if lane != 0:
-        return
     m_h2 = mass[i] / (h * h)
-    inertia = wp.identity(n=3, dtype=float) * m_h2
-    force = (inertia_target[i] - xi) * m_h2 + force_sum[0]
-    hess = inertia + hess_sum[0]
-    hel = inertia + hel_sum[0]
+    force = (inertia_target[i] - xi) * m_h2
+    hess = wp.identity(n=3, dtype=float) * m_h2
+    hel = hess
+    for g in range(part_force.shape[0]):
+        force += part_force[g, k]
+        hess += part_hess[g, k]
+        hel += part_elastic[g, k]
     if wp.abs(wp.determinant(hess)) < 1.0e-20:
-        x_out[i] = xi
         return
-    dx = wp.inverse(hess) * force
-    new = xi + dx
+    new = xi + wp.inverse(hess) * force
     if body_friction != 0:
         best = friction_part(i, body_has, body_normal, body_lambda)
         if best >= 0:
@@ -245,4 +261,4 @@ def solve_colour(
     L = wp.length(move)
     if L > bound[i]:
         new = x_det[i] + move * (bound[i] / L)
-    x_out[i] = new
+    x[i] = new
