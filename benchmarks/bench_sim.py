@@ -139,7 +139,7 @@ PHASES = {  # kernel (or native call) -> phase of a substep (the first key found
     "face_bounds": "cloth-cloth detection", "edge_bounds": "cloth-cloth detection", "bvh_refit": "cloth-cloth detection",
     "detect_vertex_triangle": "cloth-cloth detection", "detect_edge_edge": "cloth-cloth detection",
     "sort_lists": "cloth-cloth detection", "count_needed": "cloth-cloth detection", "finish_bounds": "cloth-cloth detection",
-    "solve_colour": "sweeps", "colour_partials": "sweeps", "copy_colour": "sweeps", "chebyshev": "sweeps", "contour_gradients": "untangle", "apply_untangle": "untangle",
+    "solve_colour": "sweeps", "copy_colour": "sweeps", "chebyshev": "sweeps", "contour_gradients": "untangle", "apply_untangle": "untangle",
 }
 
 

@@ -146,11 +146,6 @@ class SolverConfig:
             below ``friction_velocity`` x h only: a vertex in contact follows the body in the
             linearised step with whatever force that takes) or ``off``. See
             ``newton_kernels.vertex_force_diagonal``.
-        sweep_groups: threads per vertex that share its sums in a colour sweep
-            (``sweep_kernels.colour_partials``): each takes every ``sweep_groups``-th of the vertex's
-            faces, hinges, contacts and body planes, and a second launch adds them in order and
-            solves. More threads for the same vertices: a colour of 64 T-shirts is only about 25,000
-            vertices, too few to keep a GPU busy one thread each.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -187,7 +182,6 @@ class SolverConfig:
     cuda_graph: bool = True
     global_iterations: int = field(default=20, metadata={"min": 0, "max": 1000})
     global_friction: str = "lagged"
-    sweep_groups: int = field(default=4, metadata={"min": 1, "max": 32})
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -202,8 +196,6 @@ class SolverConfig:
         if not 0.0 <= float(self.untangle_step) <= self.self_radius:
             raise InputError(f"untangle_step must be in [0, self_radius = {self.self_radius}] m (0: off), got "
                              f"{self.untangle_step}: a longer jump can carry cloth through other cloth")
-        if not 1 <= int(self.sweep_groups) <= 32:
-            raise InputError(f"sweep_groups must be in 1..32, got {self.sweep_groups}")
         if int(self.untangle_iterations) < 1:
             raise InputError(f"untangle_iterations must be >= 1, got {self.untangle_iterations}")
         if self.global_friction not in GLOBAL_FRICTION:
@@ -242,21 +234,15 @@ class SolverVBD:
 
         from datagen.sim import detection_kernels as D
         from datagen.sim import kernels as K
-        from datagen.sim import sweep_kernels as S
 
         self.model = model
         self.config = config or SolverConfig()
-        self.K, self.D, self.S = K, D, S
+        self.K, self.D = K, D
         m = model
         n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
         with wp.ScopedDevice(m.device):
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
-            self.x_prev, self.y = z3(n), z3(n)
-            # the sweeps' per-(group, colour vertex) partial sums (sweep_kernels.colour_partials)
-            self.sweep_groups = int(self.config.sweep_groups)
-            widest = max((int(col.shape[0]) for col in m.colours), default=1)
-            self.part_force = wp.zeros((self.sweep_groups, widest), dtype=wp.vec3)
-            self.part_hess, self.part_elastic = (wp.zeros((self.sweep_groups, widest), dtype=wp.mat33) for _ in range(2))
+            self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
@@ -471,7 +457,6 @@ class SolverVBD:
                 graphs.clear()
             wp.load_module(self.K, device=dev)  # compile before capturing
             wp.load_module(self.D, device=dev)
-            wp.load_module(self.S, device=dev)
             if self.config.global_iterations:
                 from datagen.sim import newton_kernels
 
@@ -586,7 +571,7 @@ class SolverVBD:
     def _step(self, state, control, dt: float) -> None:
         import warp as wp
 
-        K, S, m, c = self.K, self.S, self.model, self.config
+        K, m, c = self.K, self.model, self.config
         n, nb = m.particle_count, m.body_vertex_count
         h = dt / c.substeps
         x, v = state.positions, state.velocities
@@ -641,18 +626,16 @@ class SolverVBD:
                         wp.copy(self.x_nm1, x)
                         omega, cheb = 1.0, 0
                     for col in m.colours:
-                        wp.launch(S.colour_partials, (self.sweep_groups, col.shape[0]), inputs=[
-                            col, x, self.x_prev, m.active, m.damping, m.faces, m.dm_inv, m.tri_area, m.tri_stiff,
-                            m.tri_lock, m.edges, m.rest_angle, m.bend_k, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-                            self.body_has, self.body_point, self.body_normal, self.body_radius, c.body_stiffness,
-                            self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.ee_count, self.ee_edge,
-                            c.self_radius, c.self_stiffness, c.self_friction, c.friction_velocity * h, h,
-                            self.part_force, self.part_hess, self.part_elastic])
-                        wp.launch(S.solve_colour_vertices, col.shape[0], inputs=[
-                            col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.friction,
-                            self.body_has, self.body_normal, self.body_disp, self.body_lambda, h, m.vertex_area,
-                            int(c.body_friction), c.friction_pressure, self.friction_used, self.part_force,
-                            self.part_hess, self.part_elastic])
+                        wp.launch(K.solve_colour, col.shape[0], inputs=[
+                            col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
+                            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
+                            m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
+                            self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
+                            self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
+                            self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
+                            c.friction_velocity * h, h, m.vertex_area, int(c.body_friction), c.friction_pressure,
+                            self.friction_used, self.x_tmp])
+                        wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
                     omega = 1.0 if cheb < 1 else (2.0 / (2.0 - rho * rho) if cheb == 1 else 4.0 / (4.0 - rho * rho * omega))
                     cheb += 1
                     if it == c.iterations - 1:
