@@ -12,7 +12,8 @@
 #   PHASE=figures bash ... (under setsid)   issue 25's table in the background, one run after the other on an
 #       otherwise idle card: the throughput at 1, 16, 64 and 256 scenes with self-collision on and off, then
 #       Newton's VBD beside drape at 64 and 256 scenes, on and off (NEWTON=0: not); BATCHES=1,16: other batch
-#       sizes; PROFILE=1,64: the profile at those batch sizes too; logs in W (default /tmp/s25); then
+#       sizes; PROFILE=1,64: the profile at those batch sizes too; SET=k=v,k=v: SolverConfig fields for every run;
+#       logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
 #   OUT=/tmp/o PHASE=compare BASE=.bench_base SETS="- sweep_groups=1" bash ...   the profile at BATCHES (default
 #       64,256), self-collision on, of an earlier tree (BASE: a copy of its datagen/ and benchmarks/, e.g.
@@ -62,13 +63,14 @@ six)
   done ;;
 figures)
   W=${W:-/tmp/s25}; mkdir -p "$W"; : > "$W/progress"; rm -f "$W/done"  # a poll waits for this run, not an earlier one
+  sets=(); opts=(); for kv in ${SET//,/ }; do sets+=(--set "$kv"); opts+=(--drape-option "$kv"); done  # SET: as in compare
   echo "$(date +%T) throughput starts" >> "$W/progress"
-  python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off 2>&1 \
+  python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off "${sets[@]}" 2>&1 \
     | filter > "$W/throughput.txt"; echo "$(date +%T) throughput exit $?" >> "$W/progress"
   [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
-    --self on --frames 3 --top 12 2>&1 | filter > "$W/profile.txt"; echo "$(date +%T) profile exit $?" >> "$W/progress"; }
+    --self on --frames 3 --top 12 "${sets[@]}" 2>&1 | filter > "$W/profile.txt"; echo "$(date +%T) profile exit $?" >> "$W/progress"; }
   [ "${NEWTON:-1}" = 1 ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda \
-    --batches 64,256 --self on,off --frames 40 2>&1 | filter > "$W/newton.txt"; echo "$(date +%T) newton exit $?" >> "$W/progress"; }
+    --batches 64,256 --self on,off --frames 40 "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; echo "$(date +%T) newton exit $?" >> "$W/progress"; }
   touch "$W/done" ;;
 poll)
   W=${W:-/tmp/s25}; t0=$SECONDS
