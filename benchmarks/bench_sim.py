@@ -98,7 +98,8 @@ def run(args) -> None:
         wp.synchronize()
         mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
         m, solver, metrics, a, c, ctrl, frames = _batch(d, n, str(dev), args.frames,
-                                                         SolverConfig(self_collision=self_col, cuda_graph=graph))
+                                                         SolverConfig(**{**_settings(args.set), "self_collision": self_col,
+                                                                         "cuda_graph": graph}))
         for _ in range(2):  # warm-up: compiles kernels, captures the two graphs (a -> c, c -> a)
             solver.step(a, c, ctrl, 1 / 30)
             a, c = c, a
@@ -342,6 +343,7 @@ def main() -> None:
     p.add_argument("--frames", type=int, default=30, help="timed frames (after two warm-up frames)")
     p.add_argument("--cuda-graph", default="on", help="on, off or on,off: replay each step as a CUDA graph (CUDA only)")
     p.add_argument("--self", default="on,off", help="self-collision settings to run: on, off or on,off")
+    p.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a SolverConfig field (repeatable)")
     p.set_defaults(func=run)
     p = sub.add_parser("profile", help="time per kernel and per phase of a frame")
     p.add_argument("--inputs", default="sim_inputs.npz")
