@@ -137,6 +137,7 @@ PHASES = {  # kernel (or native call) -> phase of a substep (the first key found
     "interpolate_body": "body: pose and refit", "mesh_refit": "body: pose and refit",
     "detect_body": "body: contact query", "predict_body_friction": "body: contact query",
     "body_contact_force": "body: contact query", "project_out_of_body": "body: projection",
+    "test_inside_body": "body: projection", "move_out_of_body": "body: projection",
     "face_bounds": "cloth-cloth detection", "edge_bounds": "cloth-cloth detection", "bvh_refit": "cloth-cloth detection",
     "detect_vertex_triangle": "cloth-cloth detection", "detect_edge_edge": "cloth-cloth detection",
     "sort_lists": "cloth-cloth detection", "count_needed": "cloth-cloth detection", "finish_bounds": "cloth-cloth detection",

@@ -239,35 +239,35 @@ def add_travel(step_max: wp.array2d(dtype=float), travel: wp.array2d(dtype=float
 
 
 @wp.kernel
-def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
-                        scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
-                        body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
-                        radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32), h: float, reach: float,
-                        x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), projected: wp.array(dtype=wp.int32),
-                        again: int, inside: wp.array(dtype=wp.int32), body_ref: wp.array(dtype=wp.int32),
-                        parts: int, travel: wp.array2d(dtype=float), box_lo: wp.array2d(dtype=wp.vec3),
-                        box_hi: wp.array2d(dtype=wp.vec3), check_x: wp.array(dtype=wp.vec3),
-                        check_travel: wp.array2d(dtype=float),
-                        check_bound: wp.array2d(dtype=float), skipped: wp.array(dtype=wp.int32), skip_tests: int,
-                        accuracy: float):
-    """Hard non-penetration at the end of a substep: a vertex inside the body (winding number, the
-    same test as the penetration metric) moves to its closest body point plus half its contact
-    radius along the face normal, and loses the velocity with which it moved into the body relative
-    to the body's own velocity there (an inelastic impact; the tangential part is kept). The
-    penalty contact does the work in the solve; this catches what it leaves inside, where one
-    closest-point plane per vertex is not enough (armpits, crotch, between the legs) or the body
-    moves faster than the penalty can push.
+def test_inside_body(body_meshes: wp.array(dtype=wp.uint64), scene: wp.array(dtype=wp.int32),
+                     body_now: wp.array(dtype=wp.vec3), query: float, active: wp.array(dtype=wp.int32),
+                     x: wp.array(dtype=wp.vec3), again: int, inside: wp.array(dtype=wp.int32),
+                     pending: wp.array(dtype=wp.int32), hit_face: wp.array(dtype=wp.int32),
+                     hit_uv: wp.array(dtype=wp.vec2), body_ref: wp.array(dtype=wp.int32), parts: int,
+                     travel: wp.array2d(dtype=float), box_lo: wp.array2d(dtype=wp.vec3),
+                     box_hi: wp.array2d(dtype=wp.vec3), check_x: wp.array(dtype=wp.vec3),
+                     check_travel: wp.array2d(dtype=float), check_bound: wp.array2d(dtype=float),
+                     skipped: wp.array(dtype=wp.int32), skip_tests: int, accuracy: float):
+    """The projection's inside test (its first half; :func:`move_out_of_body` is the second): marks
+    in ``pending`` the vertices inside the body (winding number, the same test as the penetration
+    metric), with their closest body face and its barycentric (u, v) in ``hit_face``/``hit_uv``.
 
-    ``again`` 0: a first pass, which marks in ``inside`` the vertices it found inside; 1: a
-    second pass, which looks at those alone (the others have not moved since the first pass
-    found them outside, and the body has not moved either, so it would find them outside again).
+    ``again`` 0: a first pass, which also marks them in ``inside``; 1: a second pass, which looks at
+    those alone (the others have not moved since the first pass found them outside, and the body
+    has not moved either, so it would find them outside again).
 
     The first pass skips a vertex that cannot have entered the body since its last test (see
     :func:`may_have_entered`): ``check_*`` hold where that test found it outside (relative to the
     scene's reference body vertex) and how far from each body part (``check_bound`` 0: test it);
     ``skipped`` marks the vertices skipped this pass. ``accuracy``: the winding number's β
-    (``SolverConfig.projection_accuracy``)."""
+    (``SolverConfig.projection_accuracy``).
+
+    The test and the move are two kernels so that the test, which every vertex near the body takes
+    every substep, is compiled apart from the move's search (26 directions, each a winding number),
+    which few vertices take: on its own the test needs fewer registers and no large stack, so more
+    threads run at once."""
     i = wp.tid()
+    pending[i] = 0
     if again == 0:
         inside[i] = 0
         skipped[i] = 0
@@ -298,7 +298,33 @@ def project_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: 
                 check_bound[i, part] = wp.max(dist, box_distance(x[i], box_lo[s, part], box_hi[s, part]))
         return
     inside[i] = 1
-    p, n, disp = body_surface_point(body_face_base[s] + q.face, q.u, q.v, body_faces, body_prev, body_now)
+    pending[i] = 1
+    hit_face[i] = q.face
+    hit_uv[i] = wp.vec2(q.u, q.v)
+
+
+@wp.kernel
+def move_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array(dtype=wp.int32),
+                     scene: wp.array(dtype=wp.int32), body_faces: wp.array2d(dtype=wp.int32),
+                     body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
+                     radius: wp.array(dtype=float), h: float, reach: float, x: wp.array(dtype=wp.vec3),
+                     v: wp.array(dtype=wp.vec3), projected: wp.array(dtype=wp.int32),
+                     pending: wp.array(dtype=wp.int32), hit_face: wp.array(dtype=wp.int32),
+                     hit_uv: wp.array(dtype=wp.vec2), accuracy: float):
+    """Hard non-penetration at the end of a substep, for the vertices :func:`test_inside_body` found
+    inside (``pending``): the vertex moves to its closest body point plus half its contact radius
+    along the face normal, and loses the velocity with which it moved into the body relative to the
+    body's own velocity there (an inelastic impact; the tangential part is kept). The penalty
+    contact does the work in the solve; this catches what it leaves inside, where one closest-point
+    plane per vertex is not enough (armpits, crotch, between the legs) or the body moves faster than
+    the penalty can push."""
+    i = wp.tid()
+    if pending[i] == 0:
+        return
+    s = scene[i]
+    mesh = body_meshes[s]
+    uv = hit_uv[i]
+    p, n, disp = body_surface_point(body_face_base[s] + hit_face[i], uv[0], uv[1], body_faces, body_prev, body_now)
     if wp.length(n) == 0.0:
         return
     vb = disp / h

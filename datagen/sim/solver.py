@@ -96,7 +96,7 @@ class SolverConfig:
             a load one vertex per sweep; woven cloth needs it carried across the garment at once.
         body_projection: at the end of every substep, move vertices that ended inside the body
             (winding-number test) out to its surface and take their inward velocity (see
-            ``kernels.project_out_of_body``).
+            ``kernels.test_inside_body`` and ``move_out_of_body``).
         projection_skip: let the projection's inside test skip a vertex that provably cannot have
             entered the body since its last test (its distance from the body then exceeds how far it
             and the body have moved since; ``kernels.may_have_entered``). The result is the same as
@@ -303,6 +303,10 @@ class SolverVBD:
             self.needed = wp.zeros(3, dtype=wp.int32)
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
             self.projection_inside = wp.zeros(n, dtype=wp.int32)  # the projection's first pass found it inside
+            # the inside test's finds, for the move out (kernels.test_inside_body, move_out_of_body)
+            self.projection_pending = wp.zeros(n, dtype=wp.int32)
+            self.projection_face = wp.zeros(n, dtype=wp.int32)
+            self.projection_uv = wp.zeros(n, dtype=wp.vec2)
             # what lets the projection's first pass skip a vertex that cannot have entered the body
             # since its last test (kernels.may_have_entered): per scene a reference body vertex (the
             # one nearest the rest body's centroid; -1 without a body), and per body part its
@@ -658,10 +662,14 @@ class SolverVBD:
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v, self.v_old])
                 if c.body_projection:
                     for again in range(2):  # a second pass for vertices the first put into another body part
-                        wp.launch(K.project_out_of_body, n, inputs=[
+                        wp.launch(K.test_inside_body, n, inputs=[
+                            self.body_ids, m.particle_scene, self.body_sub, 2.0 * c.body_query, m.active, x, again,
+                            self.projection_inside, self.projection_pending, self.projection_face, self.projection_uv,
+                            self.body_ref, m.body_part_count, self.body_travel, self.part_lo, self.part_hi,
+                            self.check_x, self.check_travel, self.check_bound, self.projection_skipped,
+                            int(c.projection_skip), float(c.projection_accuracy)])
+                        wp.launch(K.move_out_of_body, n, inputs=[
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
-                            self.body_sub, 2.0 * c.body_query, self.body_radius, m.active, h, c.projection_reach, x, v,
-                            self.projected, again, self.projection_inside, self.body_ref, m.body_part_count,
-                            self.body_travel, self.part_lo, self.part_hi, self.check_x, self.check_travel,
-                            self.check_bound, self.projection_skipped, int(c.projection_skip),
+                            self.body_sub, 2.0 * c.body_query, self.body_radius, h, c.projection_reach, x, v,
+                            self.projected, self.projection_pending, self.projection_face, self.projection_uv,
                             float(c.projection_accuracy)])
