@@ -9,11 +9,12 @@
 #       GPU under `time`, stopped at 585 s (run PHASE=profile first on the same machine: it compiles the
 #       kernels), with nvidia-smi sampled every 10 s
 #   OUT=/tmp/o PHASE=six bash ...   the six 300-frame runs at the production settings (RUNS=...; SETS as in compare)
-#   PHASE=figures bash ... (under setsid)   issue 25's table in the background, one run after the other on an
-#       otherwise idle card: the throughput at 1, 16, 64 and 256 scenes with self-collision on and off, then
-#       Newton's VBD beside drape at 64 and 256 scenes, on and off (NEWTON=0: not); BATCHES=1,16: other batch
-#       sizes; PROFILE=1,64: the profile at those batch sizes too; SET=k=v,k=v: SolverConfig fields for every run;
-#       logs in W (default /tmp/s25); then
+#   PHASE=figures bash ... (under setsid)   issue 25's figures in the background, one run after the other on an
+#       otherwise idle card: Newton's VBD beside drape at 64 and 256 scenes, self-collision on and off (NEWTON=0:
+#       not), then the throughput at 1, 16, 64 and 256 scenes, on and off; BATCHES=1,16: other batch sizes;
+#       PROFILE=1,64: the profile at those batch sizes too; SIX=1: the six 300-frame runs; GNN_CACHE=dir:
+#       `drape generate --preset paper-gnn --device cuda` from that cache, stopped at GNN_SECONDS (585);
+#       SET=k=v,k=v: SolverConfig fields for every run; logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
 #   OUT=/tmp/o PHASE=compare BASE=.bench_base SETS="- sweep_groups=1" bash ...   the profile at BATCHES (default
 #       64,256), self-collision on, of an earlier tree (BASE: a copy of its datagen/ and benchmarks/, e.g.
@@ -64,18 +65,25 @@ six)
 figures)
   W=${W:-/tmp/s25}; mkdir -p "$W"; : > "$W/progress"; rm -f "$W/done"  # a poll waits for this run, not an earlier one
   sets=(); opts=(); for kv in ${SET//,/ }; do sets+=(--set "$kv"); opts+=(--drape-option "$kv"); done  # SET: as in compare
-  echo "$(date +%T) throughput starts" >> "$W/progress"
-  python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off "${sets[@]}" 2>&1 \
-    | filter > "$W/throughput.txt"; echo "$(date +%T) throughput exit $?" >> "$W/progress"
-  [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
-    --self on --frames 3 --top 12 "${sets[@]}" 2>&1 | filter > "$W/profile.txt"; echo "$(date +%T) profile exit $?" >> "$W/progress"; }
+  step() { echo "$(date +%T) $1 exit $2" >> "$W/progress"; }
   [ "${NEWTON:-1}" = 1 ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda \
-    --batches 64,256 --self on,off --frames 40 "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; echo "$(date +%T) newton exit $?" >> "$W/progress"; }
+    --batches 64,256 --self on,off --frames 40 "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
+  python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off "${sets[@]}" 2>&1 \
+    | filter > "$W/throughput.txt"; step throughput $?
+  [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
+    --self on --frames 3 --top 12 "${sets[@]}" 2>&1 | filter > "$W/profile.txt"; step profile $?; }
+  [ "${SIX:-0}" = 1 ] && { python benchmarks/bench_sim.py run-scenes --inputs "$RUNS" --device cuda "${sets[@]}" 2>&1 | filter \
+    | grep --line-buffered -v "frame [0-9]*/" > "$W/six_runs.txt"; step six $?; }
+  if [ "${GNN_CACHE:-}" ]; then  # a DRAPE_CACHE_DIR with paper-gnn's bodies and garments (benchmarks/build_garment_cache.py)
+    (nvidia-smi --query-gpu=timestamp,utilization.gpu,memory.used --format=csv -l 10 > "$W/smi_gnn.csv" &)
+    ( time DRAPE_CACHE_DIR="$GNN_CACHE" timeout ${GNN_SECONDS:-585} python -m datagen.cli generate --preset paper-gnn \
+        --out /tmp/gnn.zarr --device cuda ) > "$W/generate_gnn.log" 2>&1; step paper-gnn $?
+  fi
   touch "$W/done" ;;
 poll)
   W=${W:-/tmp/s25}; t0=$SECONDS
   while [ ! -f "$W/done" ] && [ $((SECONDS - t0)) -lt "${WAIT:-540}" ]; do sleep 5; done
-  cat "$W/progress"; for f in "$W"/throughput.txt "$W"/profile.txt "$W"/newton.txt; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
+  cat "$W/progress"; for f in "$W"/newton.txt "$W"/throughput.txt "$W"/profile.txt "$W"/six_runs.txt "$W"/generate_gnn.log; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
   cp "$W"/*.txt "$W/progress" "$OUT/" 2>/dev/null ;;
 *) echo "PHASE must be profile, compare, paper-motion, six, figures or poll" >&2; exit 2 ;;
 esac
