@@ -146,6 +146,12 @@ class SolverConfig:
             below ``friction_velocity`` x h only: a vertex in contact follows the body in the
             linearised step with whatever force that takes) or ``off``. See
             ``newton_kernels.vertex_force_diagonal``.
+        colour_hinge_wings: whether the sweeps' colouring also separates a hinge's two wing vertices
+            (the corners opposite its edge, which share only the bending stencil). False colours by
+            the triangles alone: a wing then reads the other wing's position from the sweep before
+            (a colour's results are written to a copy, so nothing depends on thread order), and
+            the walking T-shirt takes 5 colours instead of 8, so 5 sweep launches instead of 8. A
+            candidate: not yet run through the six long runs.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -182,6 +188,7 @@ class SolverConfig:
     cuda_graph: bool = True
     global_iterations: int = field(default=20, metadata={"min": 0, "max": 1000})
     global_friction: str = "lagged"
+    colour_hinge_wings: bool = True
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -218,6 +225,16 @@ GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
 REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
 
+def triangle_colours(host) -> tuple[np.ndarray, ...]:
+    """The sweeps' colours when only vertices that share a triangle must differ (the model's own
+    colouring also separates a hinge's wing vertices; ``SolverConfig.colour_hinge_wings``): each
+    scene coloured on its own and the colours merged by index, as the model does."""
+    from datagen.sim.model import _scene_colours
+
+    pairs = np.unique(np.sort(np.asarray(host.edges)[:, :2], axis=1), axis=0)
+    return _scene_colours(pairs, np.asarray(host.particle_scene), np.asarray(host.particle_range))
+
+
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
@@ -243,6 +260,8 @@ class SolverVBD:
         with wp.ScopedDevice(m.device):
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
+            self.colours = m.colours if self.config.colour_hinge_wings else [
+                wp.array(col, dtype=wp.int32) for col in triangle_colours(m.host)]
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
@@ -629,7 +648,7 @@ class SolverVBD:
                         self._detect_self()
                         wp.copy(self.x_nm1, x)
                         omega, cheb = 1.0, 0
-                    for col in m.colours:
+                    for col in self.colours:
                         wp.launch(K.solve_colour, col.shape[0], inputs=[
                             col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
                             m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,

@@ -52,3 +52,31 @@ def test_colours_made_once_per_garment_are_those_made_per_scene():
     assert len(got) == len(expected) == len(h.colours)
     for g, e, m in zip(got, expected, h.colours, strict=True):
         assert np.array_equal(g, e) and np.array_equal(m, e)
+
+
+def test_triangle_colours_separate_every_triangle_and_need_fewer_colours():
+    """``SolverConfig(colour_hinge_wings=False)``'s colouring: every vertex in exactly one colour, no
+    two corners of a triangle in the same colour, each scene coloured on its own (no colour mixes
+    what scenes need), and no more colours than the model's, which also separates hinge wings."""
+    from datagen.sim.solver import triangle_colours
+
+    parts = _parts()
+    b = ClothModelBuilder()
+    for s, (v, f) in enumerate(parts):
+        b.add_cloth(v, f, scene=s)
+    h = b.finalize("cpu").host
+    colours = triangle_colours(h)
+    colour_of = np.full(len(h.rest_positions), -1)
+    for k, c in enumerate(colours):
+        assert (colour_of[c] == -1).all()
+        colour_of[c] = k
+    assert (colour_of >= 0).all()
+    f = np.asarray(h.faces)
+    for a, b_ in ((0, 1), (1, 2), (2, 0)):
+        assert (colour_of[f[:, a]] != colour_of[f[:, b_]]).all()
+    assert len(colours) <= len(h.colours)
+    stencils = np.asarray(h.edges)
+    stencils = stencils[(stencils[:, 2] >= 0) & (stencils[:, 3] >= 0)]
+    shared = int((colour_of[stencils[:, 2]] == colour_of[stencils[:, 3]]).sum())
+    print(f"\n{len(h.colours)} colours with hinge wings, {len(colours)} by the triangles alone; "
+          f"{shared} of {len(stencils)} hinges have both wings in one colour")
