@@ -225,6 +225,7 @@ GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
 REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
 
+
 def triangle_colours(host) -> tuple[np.ndarray, ...]:
     """The sweeps' colours when only vertices that share a triangle must differ (the model's own
     colouring also separates a hinge's wing vertices; ``SolverConfig.colour_hinge_wings``): each
