@@ -541,6 +541,14 @@ def _scene_colours(conflicts: np.ndarray, scene: np.ndarray, particle_range: np.
     return tuple(np.concatenate(c) for c in colours)
 
 
+def triangle_colours(host: ClothHostArrays) -> tuple[np.ndarray, ...]:
+    """The colours when only vertices that share a triangle must differ (the model's own ``colours``
+    also separate a hinge's two wing vertices; ``SolverConfig.colour_hinge_wings`` picks): each
+    scene coloured on its own and the colours merged by index, as :func:`_scene_colours` does."""
+    pairs = np.unique(np.sort(np.asarray(host.edges)[:, :2], axis=1), axis=0)
+    return _scene_colours(pairs, np.asarray(host.particle_scene), np.asarray(host.particle_range))
+
+
 def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_without_body: tuple[int, ...]) -> ClothModel:
     """The :class:`ClothModel` on ``device``: every warp array uploaded from ``host`` (float32, int32)."""
     import warp as wp

@@ -226,16 +226,6 @@ REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
 
 
-def triangle_colours(host) -> tuple[np.ndarray, ...]:
-    """The sweeps' colours when only vertices that share a triangle must differ (the model's own
-    colouring also separates a hinge's wing vertices; ``SolverConfig.colour_hinge_wings``): each
-    scene coloured on its own and the colours merged by index, as the model does."""
-    from datagen.sim.model import _scene_colours
-
-    pairs = np.unique(np.sort(np.asarray(host.edges)[:, :2], axis=1), axis=0)
-    return _scene_colours(pairs, np.asarray(host.particle_scene), np.asarray(host.particle_range))
-
-
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
@@ -252,6 +242,7 @@ class SolverVBD:
 
         from datagen.sim import detection_kernels as D
         from datagen.sim import kernels as K
+        from datagen.sim.model import triangle_colours
 
         self.model = model
         self.config = config or SolverConfig()
@@ -262,7 +253,7 @@ class SolverVBD:
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
             self.colours = m.colours if self.config.colour_hinge_wings else [
-                wp.array(col, dtype=wp.int32) for col in triangle_colours(m.host)]
+                wp.array(col, dtype=wp.int32) for col in triangle_colours(m.host)]  # the sweeps' colours
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from datagen.sim.model import ClothModelBuilder, _parts_topology, _scene_colours, _topology
+from datagen.sim.model import ClothModelBuilder, _parts_topology, _scene_colours, _topology, triangle_colours
 from tests.sim.meshes import grid
 
 
@@ -58,8 +58,6 @@ def test_triangle_colours_separate_every_triangle_and_need_fewer_colours():
     """``SolverConfig(colour_hinge_wings=False)``'s colouring: every vertex in exactly one colour, no
     two corners of a triangle in the same colour, each scene coloured on its own (no colour mixes
     what scenes need), and no more colours than the model's, which also separates hinge wings."""
-    from datagen.sim.solver import triangle_colours
-
     parts = _parts()
     b = ClothModelBuilder()
     for s, (v, f) in enumerate(parts):
