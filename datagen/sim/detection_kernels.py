@@ -248,3 +248,22 @@ def count_needed(count: wp.array(dtype=wp.int32), needed: wp.array(dtype=wp.int3
     """The largest list length asked for (to grow the contact buffers when it exceeds them)."""
     i = wp.tid()
     wp.atomic_max(needed, slot, count[i])
+
+
+BLOCK = 256
+"""Threads per block of warp's launches (its default), the block size a register cap is set for."""
+
+
+def register_capped(kernel, blocks_per_sm: int):
+    """A copy of ``kernel`` compiled with CUDA's ``__launch_bounds__(256, blocks_per_sm)``: at most
+    65,536 / (256 x ``blocks_per_sm``) registers a thread, so an SM of an sm_90 card keeps that many
+    blocks in flight (what does not fit spills to the stack). The same code, so the same results
+    (on the CPU the bound is ignored); ``SolverConfig.register_caps`` chooses these copies.
+    ``benchmarks/kernel_registers.py`` prints what each one compiles to."""
+    return wp.kernel(kernel.func, name=f"{kernel.key}_capped", launch_bounds=(BLOCK, int(blocks_per_sm)))
+
+
+# the detection's two queries are bound by the threads in flight (600,000 edge threads at 64
+# scenes): uncapped they take 94 and 72 registers (512 and 768 threads an SM)
+detect_vertex_triangle_capped = register_capped(detect_vertex_triangle, 4)  # 64 registers, 1,024 threads
+detect_edge_edge_capped = register_capped(detect_edge_edge, 3)  # 85 registers, 768 threads

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from datagen.sim.detection_kernels import are_neighbours, triangle_closest_bary
+from datagen.sim.detection_kernels import are_neighbours, register_capped, triangle_closest_bary
 
 vec5 = wp.types.vector(length=5, dtype=float)
 """A triangle's membrane law: (k_u, k_v, k_uv, k_s [N/m], buckling ratio r [-])."""
@@ -992,3 +992,10 @@ def body_contact_force(x: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int3
             d = wp.dot(x[i] - point[i, p], normal[i, p])
             if d < radius[i]:
                 lam[i, p] = k * (radius[i] - d)
+
+
+# register-capped copies (``SolverConfig.register_caps``; detection_kernels.register_capped): the
+# inside test runs for every cloth vertex near the body, every substep (80 registers uncapped, 768
+# threads an SM); the sweep kernel is one wave at 64 scenes but several at 256 (116 registers, 512)
+test_inside_body_capped = register_capped(test_inside_body, 4)  # 64 registers, 1,024 threads
+solve_colour_capped = register_capped(solve_colour, 3)  # 85 registers, 768 threads

@@ -152,6 +152,11 @@ class SolverConfig:
             (a colour's results are written to a copy, so nothing depends on thread order), and
             the walking T-shirt takes 5 colours instead of 8, so 5 sweep launches instead of 8. A
             candidate: not yet run through the six long runs.
+        register_caps: which kernels run as their register-capped copies
+            (``detection_kernels.register_capped``: the same code under CUDA's
+            ``__launch_bounds__``, so the same results with more threads in flight and some spills):
+            ``none``; ``detection`` (the two cloth-cloth queries and the projection's inside test);
+            ``all`` (those and the sweep kernel). A candidate: its speed is for a GPU to decide.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -189,6 +194,7 @@ class SolverConfig:
     global_iterations: int = field(default=20, metadata={"min": 0, "max": 1000})
     global_friction: str = "lagged"
     colour_hinge_wings: bool = True
+    register_caps: str = "none"
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -205,6 +211,8 @@ class SolverConfig:
                              f"{self.untangle_step}: a longer jump can carry cloth through other cloth")
         if int(self.untangle_iterations) < 1:
             raise InputError(f"untangle_iterations must be >= 1, got {self.untangle_iterations}")
+        if self.register_caps not in REGISTER_CAPS:
+            raise InputError(f"register_caps must be one of {', '.join(REGISTER_CAPS)}, got {self.register_caps!r}")
         if self.global_friction not in GLOBAL_FRICTION:
             raise InputError(f"global_friction must be one of {', '.join(GLOBAL_FRICTION)}, got {self.global_friction!r}")
         if not 0.0 < self.bound_fraction < 0.5:
@@ -221,6 +229,10 @@ class SolverConfig:
 
 GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
 """``SolverConfig.global_friction`` values and the code the global step's kernel takes."""
+
+REGISTER_CAPS = {"none": (), "detection": ("detect_vertex_triangle", "detect_edge_edge", "test_inside_body"),
+                 "all": ("detect_vertex_triangle", "detect_edge_edge", "test_inside_body", "solve_colour")}
+"""``SolverConfig.register_caps`` values and the kernels each runs as their register-capped copies."""
 
 REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
@@ -247,6 +259,10 @@ class SolverVBD:
         self.model = model
         self.config = config or SolverConfig()
         self.K, self.D = K, D
+        capped = REGISTER_CAPS[self.config.register_caps]
+        # the kernels launched below, each its register-capped copy where the config asks for it
+        self._kernel = {name: getattr(K if hasattr(K, name) else D, name + ("_capped" if name in capped else ""))
+                        for name in REGISTER_CAPS["all"]}
         m = model
         n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
         with wp.ScopedDevice(m.device):
@@ -501,11 +517,11 @@ class SolverVBD:
             self.face_bvh.refit()
             wp.launch(D.edge_bounds, ne, inputs=[xd, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
             self.edge_bvh.refit()
-            wp.launch(D.detect_vertex_triangle, n,
+            wp.launch(self._kernel["detect_vertex_triangle"], n,
                       inputs=[self.face_bvh.id, xd, m.rest_positions, m.particle_scene, m.faces,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
                               self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
-            wp.launch(D.detect_edge_edge, ne,
+            wp.launch(self._kernel["detect_edge_edge"], ne,
                       inputs=[self.edge_bvh.id, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.scene_frozen,
                               self.ee_count, self.ee_edge, self.min_dist])
@@ -641,7 +657,7 @@ class SolverVBD:
                         wp.copy(self.x_nm1, x)
                         omega, cheb = 1.0, 0
                     for col in self.colours:
-                        wp.launch(K.solve_colour, col.shape[0], inputs=[
+                        wp.launch(self._kernel["solve_colour"], col.shape[0], inputs=[
                             col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
                             m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
                             m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
@@ -673,7 +689,7 @@ class SolverVBD:
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v, self.v_old])
                 if c.body_projection:
                     for again in range(2):  # a second pass for vertices the first put into another body part
-                        wp.launch(K.test_inside_body, n, inputs=[
+                        wp.launch(self._kernel["test_inside_body"], n, inputs=[
                             self.body_ids, m.particle_scene, self.body_sub, 2.0 * c.body_query, m.active, x, again,
                             self.projection_inside, self.projection_pending, self.projection_face, self.projection_uv,
                             self.body_ref, m.body_part_count, self.body_travel, self.part_lo, self.part_hi,
