@@ -84,6 +84,6 @@ poll)
   W=${W:-/tmp/s25}; t0=$SECONDS
   while [ ! -f "$W/done" ] && [ $((SECONDS - t0)) -lt "${WAIT:-540}" ]; do sleep 5; done
   cat "$W/progress"; for f in "$W"/newton.txt "$W"/throughput.txt "$W"/profile.txt "$W"/six_runs.txt "$W"/generate_gnn.log; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
-  cp "$W"/*.txt "$W/progress" "$OUT/" 2>/dev/null ;;
+  cp "$W"/*.txt "$W"/*.log "$W"/*.csv "$W/progress" "$OUT/" 2>/dev/null ;;
 *) echo "PHASE must be profile, compare, paper-motion, six, figures or poll" >&2; exit 2 ;;
 esac
