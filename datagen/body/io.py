@@ -16,7 +16,9 @@ from __future__ import annotations
 import io
 import json
 import logging
+import os
 import pickle
+import uuid
 import zipfile
 from pathlib import Path
 
@@ -76,23 +78,29 @@ def save_body_file(model: BodyModel, path: str | Path) -> Path:
         "bs_type": "lrotmin",
         "drape_meta": json.dumps(model.meta, sort_keys=True),
     }
-    tmp = path.with_name(path.name + ".partial")
-    if suffix == ".pkl":
-        import scipy.sparse
+    # a name of this writer's own: two processes building the same cached body at once (the
+    # workers of build_garment_cache.py did) each write whole and rename; the last rename wins
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex}.partial")
+    try:
+        if suffix == ".pkl":
+            import scipy.sparse
 
-        data["J_regressor"] = scipy.sparse.csc_matrix(model.J_regressor.astype(np.float64))
-        data["posedirs"] = _ZerosOnLoad(zero_shape) if posedirs is None else posedirs.astype(np.float64)
-        with tmp.open("wb") as fh:
-            pickle.dump(data, fh, protocol=2)
-    else:
-        data["J_regressor"] = model.J_regressor.astype(np.float64)
-        data["posedirs"] = np.zeros(zero_shape) if posedirs is None else posedirs.astype(np.float64)
-        data["bs_style"] = np.array(data["bs_style"])
-        data["bs_type"] = np.array(data["bs_type"])
-        data["drape_meta"] = np.array(data["drape_meta"])
-        with tmp.open("wb") as fh:
-            np.savez_compressed(fh, **data)
-    tmp.replace(path)
+            data["J_regressor"] = scipy.sparse.csc_matrix(model.J_regressor.astype(np.float64))
+            data["posedirs"] = _ZerosOnLoad(zero_shape) if posedirs is None else posedirs.astype(np.float64)
+            with tmp.open("wb") as fh:
+                pickle.dump(data, fh, protocol=2)
+        else:
+            data["J_regressor"] = model.J_regressor.astype(np.float64)
+            data["posedirs"] = np.zeros(zero_shape) if posedirs is None else posedirs.astype(np.float64)
+            data["bs_style"] = np.array(data["bs_style"])
+            data["bs_type"] = np.array(data["bs_type"])
+            data["drape_meta"] = np.array(data["drape_meta"])
+            with tmp.open("wb") as fh:
+                np.savez_compressed(fh, **data)
+        tmp.replace(path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)  # nothing half written is left behind
+        raise
     logger.info("wrote body model %s (%d vertices, %.1f MB)", path, model.vertex_count, path.stat().st_size / 1e6)
     return path
 

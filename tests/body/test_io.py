@@ -139,3 +139,17 @@ def test_bad_body_files(tmp_path, small_model):
         load_body_file(tmp_path / "badshape.npz")
     with pytest.raises(InputError, match="must end in .npz or .pkl"):
         save_body_file(small_model, tmp_path / "x.obj")
+
+
+def test_concurrent_writers_of_one_body_file(small_model, tmp_path):
+    """Processes that build the same cached body at once each write a file of their own and rename
+    it into place (the workers of build_garment_cache.py once collided on one temporary name: the
+    second rename found nothing and its garment was never built); nothing temporary is left."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    path = tmp_path / "body.npz"
+    with ThreadPoolExecutor(4) as pool:
+        written = list(pool.map(lambda _: save_body_file(small_model, path), range(8)))
+    assert written == [path] * 8
+    assert load_body_file(path).vertex_count == small_model.vertex_count
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["body.npz"]
