@@ -147,16 +147,19 @@ class SolverConfig:
             linearised step with whatever force that takes) or ``off``. See
             ``newton_kernels.vertex_force_diagonal``.
         colour_hinge_wings: whether the sweeps' colouring also separates a hinge's two wing vertices
-            (the corners opposite its edge, which share only the bending stencil). False colours by
-            the triangles alone: a wing then reads the other wing's position from the sweep before
-            (a colour's results are written to a copy, so nothing depends on thread order), and
-            the walking T-shirt takes 5 colours instead of 8, so 5 sweep launches instead of 8. A
-            candidate: not yet run through the six long runs.
+            (the corners opposite its edge, which share only the bending stencil). False (the
+            default) colours by the triangles alone: a wing then reads the other wing's position
+            from the sweep before (a colour's results are written to a copy, so nothing depends on
+            thread order), and the walking T-shirt takes 5 colours instead of 8, so 5 sweep
+            launches instead of 8: on an H100 the sweeps take 121 ms a frame instead of 181 at 64
+            scenes, and the six long runs, the physics tests and Cusick pass (``docs/simulator.md``).
         register_caps: which kernels run as their register-capped copies
             (``detection_kernels.register_capped``: the same code under CUDA's
-            ``__launch_bounds__``, so the same results with more threads in flight and some spills):
-            ``none``; ``detection`` (the two cloth-cloth queries and the projection's inside test);
-            ``all`` (those and the sweep kernel). A candidate: its speed is for a GPU to decide.
+            ``__launch_bounds__``, so the same results, bitwise, with more threads in flight and
+            a few spills): ``none``; ``detection`` (the default: the two cloth-cloth queries and
+            the projection's inside test, 94 -> 80, 72 -> 64 and 80 -> 64 registers; on an H100
+            the frame takes 0.97x at 64 scenes and 0.94x at 256); ``all`` (those and the sweep
+            kernel, 116 -> 80 with spills: 1.02x and 1.11x the frame of no caps, slower).
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -193,8 +196,8 @@ class SolverConfig:
     cuda_graph: bool = True
     global_iterations: int = field(default=20, metadata={"min": 0, "max": 1000})
     global_friction: str = "lagged"
-    colour_hinge_wings: bool = True
-    register_caps: str = "none"
+    colour_hinge_wings: bool = False
+    register_caps: str = "detection"
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
