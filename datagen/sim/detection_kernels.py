@@ -266,4 +266,4 @@ def register_capped(kernel, blocks_per_sm: int):
 # the detection's two queries are bound by the threads in flight (600,000 edge threads at 64
 # scenes): uncapped they take 94 and 72 registers (512 and 768 threads an SM)
 detect_vertex_triangle_capped = register_capped(detect_vertex_triangle, 4)  # 64 registers, 1,024 threads
-detect_edge_edge_capped = register_capped(detect_edge_edge, 3)  # 85 registers, 768 threads
+detect_edge_edge_capped = register_capped(detect_edge_edge, 3)  # at most 85 registers (80 used), 768 threads

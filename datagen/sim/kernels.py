@@ -998,4 +998,4 @@ def body_contact_force(x: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int3
 # inside test runs for every cloth vertex near the body, every substep (80 registers uncapped, 768
 # threads an SM); the sweep kernel is one wave at 64 scenes but several at 256 (116 registers, 512)
 test_inside_body_capped = register_capped(test_inside_body, 4)  # 64 registers, 1,024 threads
-solve_colour_capped = register_capped(solve_colour, 3)  # 85 registers, 768 threads
+solve_colour_capped = register_capped(solve_colour, 3)  # at most 85 registers (80 used, with spills), 768 threads

@@ -155,8 +155,8 @@ class SolverConfig:
             scenes, and the six long runs, the physics tests and Cusick pass (``docs/simulator.md``).
         register_caps: which kernels run as their register-capped copies
             (``detection_kernels.register_capped``: the same code under CUDA's
-            ``__launch_bounds__``, so the same results, bitwise, with more threads in flight and
-            a few spills): ``none``; ``detection`` (the default: the two cloth-cloth queries and
+            ``__launch_bounds__``, with more threads in flight and a few spills; bitwise the same
+            results on the CPU, which ignores the bound; on CUDA not yet compared bitwise): ``none``; ``detection`` (the default: the two cloth-cloth queries and
             the projection's inside test, 94 -> 80, 72 -> 64 and 80 -> 64 registers; on an H100
             the frame takes 0.97x at 64 scenes and 0.94x at 256); ``all`` (those and the sweep
             kernel, 116 -> 80 with spills: 1.02x and 1.11x the frame of no caps, slower).
