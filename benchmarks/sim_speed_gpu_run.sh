@@ -16,6 +16,7 @@
 #       `drape generate --preset paper-gnn --device cuda` from that cache, stopped at GNN_SECONDS (585);
 #       SET=k=v,k=v: SolverConfig fields for every run; logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
+#   (NEWTON_BATCHES=64: Newton at those batch sizes only; at 256 scenes its own solver set-up takes minutes)
 #   OUT=/tmp/o PHASE=compare BASE=.bench_base SETS="- sweep_groups=1" bash ...   the profile at BATCHES (default
 #       64,256), self-collision on, of an earlier tree (BASE: a copy of its datagen/ and benchmarks/, e.g.
 #       `git archive REF datagen benchmarks | tar x -C .bench_base`; none: left out) and of this one at each
@@ -42,7 +43,11 @@ paper-motion)
   grep "set-up of" "$OUT/generate_pm.log" ;;
 compare)
   # SETS: space-separated variants of this tree, each a comma-separated list of SolverConfig KEY=VALUE
-  # ("-": the defaults); BASE=none leaves the earlier tree out
+  # ("-": the defaults); BASE=none leaves the earlier tree out; TESTS=1 first runs the simulator's
+  # CUDA-only tests (their output in $OUT/cuda_tests.txt)
+  [ "${TESTS:-0}" = 1 ] && python -m pytest -q -p no:cacheprovider -k cuda tests/sim/test_register_caps.py \
+    tests/sim/test_projection_skip.py tests/sim/test_physics.py tests/sim/test_untangle.py 2>&1 | filter \
+    > "$OUT/cuda_tests.txt"; [ -f "$OUT/cuda_tests.txt" ] && tail -3 "$OUT/cuda_tests.txt"
   trees=("${BASE:-.bench_base}"); [ "${BASE:-}" = none ] && trees=()
   for tree in "${trees[@]}"; do
     ( cd "$tree" && PYTHONPATH="$PWD:$PYTHONPATH" python benchmarks/bench_sim.py profile --inputs "$OLDPWD/$SIM_INPUTS" \
@@ -67,7 +72,7 @@ figures)
   sets=(); opts=(); for kv in ${SET//,/ }; do sets+=(--set "$kv"); opts+=(--drape-option "$kv"); done  # SET: as in compare
   step() { echo "$(date +%T) $1 exit $2" >> "$W/progress"; }
   [ "${NEWTON:-1}" = 1 ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda \
-    --batches 64,256 --self on,off --frames 40 "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
+    --batches ${NEWTON_BATCHES:-64,256} --self on,off --frames 40 "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
   python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off "${sets[@]}" 2>&1 \
     | filter > "$W/throughput.txt"; step throughput $?
   [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
