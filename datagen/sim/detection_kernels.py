@@ -109,15 +109,16 @@ def detect_vertex_triangle(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest
                            query: float, contact_radius: float, active: wp.array(dtype=wp.int32),
                            vt_count: wp.array(dtype=wp.int32), vt_tri: wp.array2d(dtype=wp.int32),
                            tv_count: wp.array(dtype=wp.int32), tv_vert: wp.array2d(dtype=wp.int32),
-                           min_dist: wp.array(dtype=float)):
+                           min_dist: wp.array(dtype=float), order: wp.array(dtype=wp.int32)):
     """Vertex-triangle pairs of the cloth closer than ``contact_radius`` (stored both ways), and
     every vertex's distance to the nearest triangle within ``query`` that is not next to it.
 
     A triangle next to the vertex (one of its corners is a neighbour) is a contact only when it
     was farther than 1.5x the contact radius in the rest shape (so flat cloth never pushes on
     itself), and does not bound the vertex's move (that would cap every vertex's speed at a
-    fraction of an edge length per substep)."""
-    i = wp.tid()
+    fraction of an edge length per substep). Thread t takes vertex ``order[t]`` (the lists are
+    sorted afterwards and the distances are minima, so the order changes nothing but speed)."""
+    i = order[wp.tid()]
     p = x[i]
     lo = p - wp.vec3(query)
     hi = p + wp.vec3(query)
@@ -164,16 +165,17 @@ def detect_edge_edge(edge_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), rest: wp.a
                      scene: wp.array(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                      nbr_offsets: wp.array(dtype=wp.int32), nbr: wp.array(dtype=wp.int32), query: float,
                      contact_radius: float, frozen: wp.array(dtype=wp.int32), ee_count: wp.array(dtype=wp.int32),
-                     ee_edge: wp.array2d(dtype=wp.int32), min_dist: wp.array(dtype=float)):
+                     ee_edge: wp.array2d(dtype=wp.int32), min_dist: wp.array(dtype=float),
+                     order: wp.array(dtype=wp.int32)):
     """Edge-edge pairs of the cloth closer than ``contact_radius``, stored in both edges' lists
     (``ee_count`` must start at zero; the rows are sorted afterwards); edges next to each other are
     treated as in :func:`detect_vertex_triangle`.
 
     Each pair is measured once, by the thread of its lower edge: the search box of either edge,
     grown by ``query``, finds the other, so the higher edge's thread skips it. Scenes that are
-    ``frozen`` (failed, no longer simulated) are not searched.
+    ``frozen`` (failed, no longer simulated) are not searched. Thread t takes edge ``order[t]``.
     """
-    e = wp.tid()
+    e = order[wp.tid()]
     a = edges[e, 0]
     b = edges[e, 1]
     if frozen[scene[a]] != 0:

@@ -247,7 +247,8 @@ def test_inside_body(body_meshes: wp.array(dtype=wp.uint64), scene: wp.array(dty
                      travel: wp.array2d(dtype=float), box_lo: wp.array2d(dtype=wp.vec3),
                      box_hi: wp.array2d(dtype=wp.vec3), check_x: wp.array(dtype=wp.vec3),
                      check_travel: wp.array2d(dtype=float), check_bound: wp.array2d(dtype=float),
-                     skipped: wp.array(dtype=wp.int32), skip_tests: int, accuracy: float):
+                     skipped: wp.array(dtype=wp.int32), skip_tests: int, accuracy: float,
+                     order: wp.array(dtype=wp.int32)):
     """The projection's inside test (its first half; :func:`move_out_of_body` is the second): marks
     in ``pending`` the vertices inside the body (winding number, the same test as the penetration
     metric), with their closest body face and its barycentric (u, v) in ``hit_face``/``hit_uv``.
@@ -265,8 +266,8 @@ def test_inside_body(body_meshes: wp.array(dtype=wp.uint64), scene: wp.array(dty
     The test and the move are two kernels so that the test, which every vertex near the body takes
     every substep, is compiled apart from the move's search (26 directions, each a winding number),
     which few vertices take: on its own the test needs fewer registers and no large stack, so more
-    threads run at once."""
-    i = wp.tid()
+    threads run at once. Thread t takes vertex ``order[t]`` (``model.launch_order``)."""
+    i = order[wp.tid()]
     pending[i] = 0
     if again == 0:
         inside[i] = 0
@@ -310,15 +311,15 @@ def move_out_of_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.
                      radius: wp.array(dtype=float), h: float, reach: float, x: wp.array(dtype=wp.vec3),
                      v: wp.array(dtype=wp.vec3), projected: wp.array(dtype=wp.int32),
                      pending: wp.array(dtype=wp.int32), hit_face: wp.array(dtype=wp.int32),
-                     hit_uv: wp.array(dtype=wp.vec2), accuracy: float):
+                     hit_uv: wp.array(dtype=wp.vec2), accuracy: float, order: wp.array(dtype=wp.int32)):
     """Hard non-penetration at the end of a substep, for the vertices :func:`test_inside_body` found
     inside (``pending``): the vertex moves to its closest body point plus half its contact radius
     along the face normal, and loses the velocity with which it moved into the body relative to the
     body's own velocity there (an inelastic impact; the tangential part is kept). The penalty
     contact does the work in the solve; this catches what it leaves inside, where one closest-point
     plane per vertex is not enough (armpits, crotch, between the legs) or the body moves faster than
-    the penalty can push."""
-    i = wp.tid()
+    the penalty can push. Thread t takes vertex ``order[t]``."""
+    i = order[wp.tid()]
     if pending[i] == 0:
         return
     s = scene[i]
@@ -422,7 +423,7 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
                 body_prev: wp.array(dtype=wp.vec3), body_now: wp.array(dtype=wp.vec3), query: float,
                 radius: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
                 inertia_target: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32), point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
-                body_disp: wp.array2d(dtype=wp.vec3)):
+                body_disp: wp.array2d(dtype=wp.vec3), order: wp.array(dtype=wp.int32)):
     """Contact planes of each cloth vertex with the body (this substep's pose), one slot per body
     part: the closest point of the whole body within ``query`` (in its part's slot), and the
     closest point of every other part within ``query`` that is not on that part's border (where
@@ -440,8 +441,9 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     A vertex that the body's move has put closer than a plane's contact radius (or just behind
     it: less than two radii) is first moved out along the normal (the pushes of its planes
     added), with its inertial target, so the body's push is never held back by the cloth's
-    conservative move bound (which is measured from these positions)."""
-    i = wp.tid()
+    conservative move bound (which is measured from these positions). Thread t takes vertex
+    ``order[t]``."""
+    i = order[wp.tid()]
     P = has.shape[1]
     best_dist = part_floats(query)
     best_face = part_ints(-1)

@@ -691,3 +691,32 @@ def _colour(n: int, conflicts: np.ndarray) -> list[np.ndarray]:
     wp.utils.graph_coloring_assign(wp.array(conflicts.astype(np.int32), dtype=wp.int32, device="cpu"), colours)
     c = colours.numpy()
     return [np.flatnonzero(c == k).astype(np.int32) for k in range(c.max() + 1)]
+
+
+MORTON_BITS = 10
+"""Bits per axis of :func:`launch_order`'s Morton codes (1,024 cells along a scene's longest side)."""
+
+
+def launch_order(points: np.ndarray, ranges: np.ndarray) -> np.ndarray:
+    """An order in which to launch one thread per point so that neighbouring threads hold points
+    near each other: within each scene's range ``[first, end)`` the points sorted by the Morton
+    code (Z-order) of their position in the scene's bounding box, ties by index; ranges stay where
+    they are, so the order of a scene does not depend on its batch. Garment meshes number their
+    vertices in no spatial order (32 consecutive vertices of the walking T-shirt span 594 mm of its
+    700; in this order 186 mm), so the threads of a warp in a tree query walk different branches.
+    Returns int32 indices, a permutation of ``range(ranges[-1, 1])`` when the ranges tile it."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    out = np.arange(len(pts), dtype=np.int64)
+    for first, end in np.asarray(ranges, dtype=np.int64).reshape(-1, 2):
+        if end - first < 2:
+            continue
+        p = pts[first:end]
+        lo, span = p.min(0), float((p.max(0) - p.min(0)).max())
+        q = np.zeros_like(p, dtype=np.int64) if span <= 0 else np.minimum(
+            ((p - lo) / span * (1 << MORTON_BITS)).astype(np.int64), (1 << MORTON_BITS) - 1)
+        code = np.zeros(len(p), dtype=np.int64)
+        for bit in range(MORTON_BITS):
+            for axis in range(3):
+                code |= ((q[:, axis] >> bit) & 1) << (3 * bit + axis)
+        out[first:end] = first + np.argsort(code, kind="stable")
+    return out.astype(np.int32)

@@ -160,6 +160,13 @@ class SolverConfig:
             the projection's inside test, 94 -> 80, 72 -> 64 and 80 -> 64 registers; on an H100
             the frame takes 0.97x at 64 scenes and 0.94x at 256); ``all`` (those and the sweep
             kernel, 116 -> 80 with spills: 1.02x and 1.11x the frame of no caps, slower).
+        coherent_order: launch the tree queries (the cloth-cloth detection, the body contact
+            query, the projection) with one thread per vertex or edge in Morton order of the rest
+            shape (``model.launch_order``), and sort every sweep colour the same way, so the threads
+            of a warp hold cloth near each other; False launches them in index order, in which a
+            garment's 32 consecutive vertices span most of it. The results are the same either way,
+            bitwise (each thread writes its own element; contact lists are sorted and distances are
+            minima; tested). A candidate: its speed is for a GPU to decide.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -198,6 +205,7 @@ class SolverConfig:
     global_friction: str = "lagged"
     colour_hinge_wings: bool = False
     register_caps: str = "detection"
+    coherent_order: bool = False
 
     def __post_init__(self):
         for name in ("substeps", "iterations"):
@@ -257,7 +265,7 @@ class SolverVBD:
 
         from datagen.sim import detection_kernels as D
         from datagen.sim import kernels as K
-        from datagen.sim.model import triangle_colours
+        from datagen.sim.model import launch_order, triangle_colours
 
         self.model = model
         self.config = config or SolverConfig()
@@ -271,8 +279,23 @@ class SolverVBD:
         with wp.ScopedDevice(m.device):
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
-            self.colours = m.colours if self.config.colour_hinge_wings else [
-                wp.array(col, dtype=wp.int32) for col in triangle_colours(m.host)]  # the sweeps' colours
+            h = m.host
+            if self.config.coherent_order:  # threads of one warp on cloth near each other (launch_order)
+                self.vertex_order = wp.array(launch_order(h.rest_positions, h.particle_range), dtype=wp.int32)
+                self.edge_order = wp.array(launch_order(np.asarray(h.rest_positions)[np.asarray(h.edge_pairs)].mean(1),
+                                                        h.edge_range), dtype=wp.int32)
+                rank = np.empty(n, dtype=np.int64)
+                rank[self.vertex_order.numpy()] = np.arange(n)
+            else:
+                self.vertex_order = wp.array(np.arange(n, dtype=np.int32), dtype=wp.int32)
+                self.edge_order = wp.array(np.arange(ne, dtype=np.int32), dtype=wp.int32)
+            if self.config.colour_hinge_wings and not self.config.coherent_order:
+                self.colours = m.colours  # the sweeps' colours
+            else:
+                cols = h.colours if self.config.colour_hinge_wings else triangle_colours(h)
+                if self.config.coherent_order:
+                    cols = [np.asarray(c)[np.argsort(rank[np.asarray(c)], kind="stable")] for c in cols]
+                self.colours = [wp.array(np.asarray(c, dtype=np.int32), dtype=wp.int32) for c in cols]
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
@@ -523,11 +546,12 @@ class SolverVBD:
             wp.launch(self._kernel["detect_vertex_triangle"], n,
                       inputs=[self.face_bvh.id, xd, m.rest_positions, m.particle_scene, m.faces,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
-                              self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist])
+                              self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist,
+                              self.vertex_order])
             wp.launch(self._kernel["detect_edge_edge"], ne,
                       inputs=[self.edge_bvh.id, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
                               m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.scene_frozen,
-                              self.ee_count, self.ee_edge, self.min_dist])
+                              self.ee_count, self.ee_edge, self.min_dist, self.edge_order])
             wp.launch(D.sort_lists, n, inputs=[self.vt_count, self.vt_tri])
             wp.launch(D.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
             wp.launch(D.sort_lists, ne, inputs=[self.ee_count, self.ee_edge])
@@ -636,7 +660,8 @@ class SolverVBD:
                                                     m.body_face_border, self.x_prev, m.particle_scene,
                                                     m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
                                                     self.body_radius, m.active, self.y, self.body_has,
-                                                    self.body_point, self.body_normal, self.body_disp])
+                                                    self.body_point, self.body_normal, self.body_disp,
+                                                    self.vertex_order])
                 if c.body_friction:
                     wp.launch(K.predict_body_friction, n, inputs=[
                         self.x_prev, m.mass, m.active, self.body_has, self.body_normal, self.body_disp,
@@ -697,9 +722,9 @@ class SolverVBD:
                             self.projection_inside, self.projection_pending, self.projection_face, self.projection_uv,
                             self.body_ref, m.body_part_count, self.body_travel, self.part_lo, self.part_hi,
                             self.check_x, self.check_travel, self.check_bound, self.projection_skipped,
-                            int(c.projection_skip), float(c.projection_accuracy)])
+                            int(c.projection_skip), float(c.projection_accuracy), self.vertex_order])
                         wp.launch(K.move_out_of_body, n, inputs=[
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
                             self.body_sub, 2.0 * c.body_query, self.body_radius, h, c.projection_reach, x, v,
                             self.projected, self.projection_pending, self.projection_face, self.projection_uv,
-                            float(c.projection_accuracy)])
+                            float(c.projection_accuracy), self.vertex_order])

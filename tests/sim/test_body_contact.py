@@ -76,7 +76,8 @@ def test_contact_planes_equal_brute_force_per_part_closest_points(two_part_body)
     wp.launch(K.detect_body, n, inputs=[
         solver.body_ids, model.body_face_base, model.body_face_part, model.body_face_border, pos,
         model.particle_scene, model.body_faces, solver.body_sub, solver.body_sub, config.body_query,
-        solver.body_radius, model.active, y, solver.body_has, solver.body_point, solver.body_normal, solver.body_disp])
+        solver.body_radius, model.active, y, solver.body_has, solver.body_point, solver.body_normal, solver.body_disp,
+        solver.vertex_order])
     has, point, normal = solver.body_has.numpy(), solver.body_point.numpy(), solver.body_normal.numpy()
     border = model.host.body_face_border
     B = model.host.body_rest.astype(np.float64)

@@ -1,6 +1,7 @@
-"""``SolverConfig.register_caps`` runs some kernels as register-capped copies of themselves
-(``detection_kernels.register_capped``): the same code under CUDA's ``__launch_bounds__``, so the
-same result, bitwise."""
+"""Settings that change how kernels are launched, not what they compute: ``SolverConfig.register_caps``
+runs some kernels as register-capped copies of themselves (``detection_kernels.register_capped``: the
+same code under CUDA's ``__launch_bounds__``), ``SolverConfig.coherent_order`` launches the tree
+queries in Morton order (``model.launch_order``); the same result, bitwise."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from tests.sim.test_projection_skip import _devices
 FPS = 30
 
 
-def _run(caps: str, device: str, frames: int = 8):
+def _run(caps: str, device: str, frames: int = 8, **config):
     """Two 30 cm cotton layers 5 mm apart (one mesh) falling onto a sphere: cloth-cloth contacts
     between the layers from the first substep, body contact and projection once they land.
     Returns the positions of every frame and the contacts the last detection found."""
@@ -33,7 +34,7 @@ def _run(caps: str, device: str, frames: int = 8):
     sv, sf = np.asarray(s.vertices, dtype=np.float64) + [0.0, -0.11, 0.0], np.asarray(s.faces, dtype=np.int64)
     b.add_body(sv, sf)
     model = b.finalize(device)
-    solver = SolverVBD(model, SolverConfig(register_caps=caps, substeps=4, iterations=8))
+    solver = SolverVBD(model, SolverConfig(register_caps=caps, substeps=4, iterations=8, **config))
     s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
     out = []
     for _ in range(frames):
@@ -59,3 +60,36 @@ def test_register_caps_are_checked():
     assert set(REGISTER_CAPS) == {"none", "detection", "all"}
     with pytest.raises(InputError, match="register_caps must be one of none, detection, all"):
         SolverConfig(register_caps="some")
+
+
+@pytest.mark.parametrize("device", _devices())
+def test_coherent_launch_order_gives_the_same_result(device):
+    """``SolverConfig.coherent_order`` launches the tree queries in Morton order and sorts the sweep
+    colours the same way: every position of every frame bitwise as in index order."""
+    reference, contacts = _run("detection", device)
+    ordered, ordered_contacts = _run("detection", device, coherent_order=True)
+    assert ordered_contacts == contacts > 0
+    for k, (a, b) in enumerate(zip(reference, ordered)):
+        assert np.array_equal(a, b), f"frame {k}: moved by up to {np.abs(a - b).max():.3e} m"
+
+
+def test_launch_order_is_a_spatially_coherent_permutation_per_scene():
+    from datagen.sim.model import launch_order
+
+    rng = np.random.default_rng(0)
+    v, _ = grid(33, 33, 0.01)
+    shuffled = v[rng.permutation(len(v))]
+    pts = np.vstack([shuffled, shuffled])  # two scenes of one garment (scenes overlap in space)
+    ranges = np.array([[0, len(v)], [len(v), 2 * len(v)]])
+    order = launch_order(pts, ranges)
+    assert order.dtype == np.int32
+    assert sorted(order[:len(v)].tolist()) == list(range(len(v)))  # each scene keeps its own range
+    assert sorted(order[len(v):].tolist()) == list(range(len(v), 2 * len(v)))
+    assert np.array_equal(order[len(v):] - len(v), order[:len(v)])  # a scene's order is its own alone
+
+    def warp_spread(p):  # median diagonal of the boxes of 32 consecutive points
+        w = p[:len(p) // 32 * 32].reshape(-1, 32, 3)
+        return float(np.median(np.linalg.norm(w.max(1) - w.min(1), axis=1)))
+
+    assert warp_spread(pts[order[:len(v)]]) < 0.3 * warp_spread(shuffled)
+    assert launch_order(np.zeros((1, 3)), np.array([[0, 1]])).tolist() == [0]
