@@ -35,7 +35,7 @@ def frame_crossings(x: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> np.n
     wp.launch(crossings, len(edges), device="cpu",
               inputs=[bvh.id, xs, wp.zeros(len(x), dtype=wp.int32, device="cpu"),
                       wp.array(faces.astype(np.int32), device="cpu"), wp.array(edges.astype(np.int32), device="cpu"),
-                      count, out])
+                      count, out, wp.array(np.arange(len(edges), dtype=np.int32), device="cpu")])
     o = out.numpy()
     e, k = np.nonzero(o >= 0)
     return np.stack([e, o[e, k]], 1)

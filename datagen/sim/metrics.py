@@ -72,8 +72,8 @@ class Failure:
 
 @wp.kernel
 def _inside(body_meshes: wp.array(dtype=wp.uint64), x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
-            depth: wp.array(dtype=float)):
-    i = wp.tid()
+            depth: wp.array(dtype=float), order: wp.array(dtype=wp.int32)):
+    i = order[wp.tid()]  # thread t: vertex order[t] (SolverVBD.vertex_order)
     p = x[i]
     mesh = body_meshes[scene[i]]
     d = signed_distance(mesh, p, 0.5)
@@ -83,11 +83,12 @@ def _inside(body_meshes: wp.array(dtype=wp.uint64), x: wp.array(dtype=wp.vec3), 
 @wp.kernel
 def crossings(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
               faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32), out: wp.array(dtype=wp.int32),
-              pairs: wp.array2d(dtype=wp.int32)):
+              pairs: wp.array2d(dtype=wp.int32), order: wp.array(dtype=wp.int32)):
     """How many triangles of its own scene each cloth edge crosses (``out``), and the first
     ``pairs.shape[1]`` of them (``pairs``, left as they were after the last; width 0: none kept,
-    as the per-frame metric does; ``benchmarks/crossing_regions.py`` keeps them)."""
-    e = wp.tid()
+    as the per-frame metric does; ``benchmarks/crossing_regions.py`` keeps them). Thread t takes
+    edge ``order[t]`` (``SolverVBD.edge_order``)."""
+    e = order[wp.tid()]
     a = edges[e, 0]
     b = edges[e, 1]
     qry = wp.bvh_query_aabb(face_bvh, wp.min(x[a], x[b]), wp.max(x[a], x[b]), wp.bvh_get_group_root(face_bvh, scene[a]))
@@ -276,11 +277,12 @@ class Metrics:
         m, h, S = self.model, self.model.host, self.model.scene_count
         x_wp = state.positions
         with wp.ScopedDevice(m.device):
-            wp.launch(_inside, m.particle_count, inputs=[solver.body_ids, x_wp, m.particle_scene, self._depth])
+            wp.launch(_inside, m.particle_count, inputs=[solver.body_ids, x_wp, m.particle_scene, self._depth,
+                                                         solver.vertex_order])
             wp.launch(face_bounds, m.face_count, inputs=[x_wp, m.faces, self._lo, self._hi])
             self._bvh.refit()
             wp.launch(crossings, m.edge_count, inputs=[self._bvh.id, x_wp, m.particle_scene, m.faces,
-                                                       m.edge_pairs, self._cross, self._no_pairs])
+                                                       m.edge_pairs, self._cross, self._no_pairs, solver.edge_order])
             wp.launch(_slip, m.particle_count, inputs=[x_wp, solver.body_sub, self._anchor, self._rest_d, self._slip])
             wp.launch(_face_stretch, m.face_count, inputs=[x_wp, m.faces, self._dm_inv, self._stretch])
             wp.launch(_vertex_energy, m.particle_count, inputs=[x_wp, state.velocities, self._mass, self._energy,

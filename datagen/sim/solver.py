@@ -161,7 +161,8 @@ class SolverConfig:
             the frame takes 0.97x at 64 scenes and 0.94x at 256); ``all`` (those and the sweep
             kernel, 116 -> 80 with spills: 1.02x and 1.11x the frame of no caps, slower).
         coherent_order: launch the tree queries (the cloth-cloth detection, the body contact
-            query, the projection) with one thread per vertex or edge in Morton order of the rest
+            query, the projection, the untangling, and the per-frame penetration and crossing
+            metrics) with one thread per vertex or edge in Morton order of the rest
             shape (``model.launch_order``), and sort every sweep colour the same way, so the threads
             of a warp hold cloth near each other; False launches them in index order, in which a
             garment's 32 consecutive vertices span most of it. The results are the same either way,
@@ -578,7 +579,7 @@ class SolverVBD:
             self.face_bvh.refit()
             wp.launch(U.contour_gradients, m.edge_count, inputs=[
                 self.face_bvh.id, x, m.particle_scene, m.faces, m.edges, self.scene_frozen, int(it > 0),
-                self.untangle_edges, self.untangle_push, self.untangle_hits])
+                self.untangle_edges, self.untangle_push, self.untangle_hits, self.edge_order])
             wp.launch(U.apply_untangle, m.particle_count, inputs=[self.untangle_push, self.untangle_hits, m.active,
                                                                   self.config.untangle_step, x])
 

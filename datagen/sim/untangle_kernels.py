@@ -69,7 +69,8 @@ def contour_gradient(xa: wp.vec3, xb: wp.vec3, n_tri: wp.vec3, has0: int, o0: wp
 def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32),
                       faces: wp.array2d(dtype=wp.int32), edges: wp.array2d(dtype=wp.int32),
                       frozen: wp.array(dtype=wp.int32), only_marked: int, marked: wp.array(dtype=wp.int32),
-                      push: wp.array2d(dtype=wp.int32), hits: wp.array(dtype=wp.int32)):
+                      push: wp.array2d(dtype=wp.int32), hits: wp.array(dtype=wp.int32),
+                      order: wp.array(dtype=wp.int32)):
     """For every edge of the cloth (``edges`` [E, 4]: its two vertices and the corners opposite it,
     -1 on a border) that crosses a triangle of its own scene: add the unit contour gradient to the
     edge's two vertices' ``push`` and subtract it from the triangle's three (``push`` [N, 3] in
@@ -78,8 +79,10 @@ def contour_gradients(face_bvh: wp.uint64, x: wp.array(dtype=wp.vec3), scene: wp
 
     With ``only_marked`` 0 every edge is queried and ``marked[e]`` says whether edge e crossed
     anything; with 1 only the marked edges are queried (the later iterations of one untangling:
-    a quiet batch pays one tree query per substep, not one per iteration)."""
-    e = wp.tid()
+    a quiet batch pays one tree query per substep, not one per iteration). Thread t takes edge
+    ``order[t]`` (``SolverVBD.edge_order``; the pushes and counts are integer sums, so the order
+    changes nothing but speed)."""
+    e = order[wp.tid()]
     if only_marked != 0:
         if marked[e] == 0:
             return

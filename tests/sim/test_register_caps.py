@@ -9,6 +9,7 @@ import numpy as np
 import pytest
 
 from datagen.errors import InputError
+from datagen.sim.metrics import Metrics
 from datagen.sim.model import ClothModelBuilder
 from datagen.sim.solver import REGISTER_CAPS, SolverConfig, SolverVBD
 from datagen.sim.state import BodyControl, ClothState
@@ -21,7 +22,7 @@ FPS = 30
 def _run(caps: str, device: str, frames: int = 8, **config):
     """Two 30 cm cotton layers 5 mm apart (one mesh) falling onto a sphere: cloth-cloth contacts
     between the layers from the first substep, body contact and projection once they land.
-    Returns the positions of every frame and the contacts the last detection found."""
+    Returns the positions and metrics of every frame and the contacts the last detection found."""
     import trimesh
 
     lower_v, lower_f = grid(13, 13, 0.025, y=0.0)
@@ -35,12 +36,13 @@ def _run(caps: str, device: str, frames: int = 8, **config):
     b.add_body(sv, sf)
     model = b.finalize(device)
     solver = SolverVBD(model, SolverConfig(register_caps=caps, substeps=4, iterations=8, **config))
+    metrics = Metrics(model)
     s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
     out = []
     for _ in range(frames):
         solver.step(s0, s1, BodyControl.from_numpy(model, sv), 1.0 / FPS)
         s0, s1 = s1, s0
-        out.append(s0.numpy()[0].copy())
+        out.append((s0.numpy()[0].copy(), metrics.measure(s0, solver)))
     contacts = int(solver.vt_count.numpy().sum() + solver.ee_count.numpy().sum())
     return out, contacts
 
@@ -52,8 +54,9 @@ def test_capped_kernels_give_the_same_result(device):
     for caps in ("detection", "all"):
         capped, capped_contacts = _run(caps, device)
         assert capped_contacts == contacts
-        for k, (a, b) in enumerate(zip(reference, capped)):
+        for k, ((a, ma), (b, mb)) in enumerate(zip(reference, capped)):
             assert np.array_equal(a, b), f"{caps}, frame {k}: moved by up to {np.abs(a - b).max():.3e} m"
+            assert all(np.array_equal(ma[name], mb[name]) for name in ma), f"{caps}, frame {k}: metrics differ"
 
 
 def test_register_caps_are_checked():
@@ -65,12 +68,13 @@ def test_register_caps_are_checked():
 @pytest.mark.parametrize("device", _devices())
 def test_coherent_launch_order_gives_the_same_result(device):
     """``SolverConfig.coherent_order`` launches the tree queries in Morton order and sorts the sweep
-    colours the same way: every position of every frame bitwise as in index order."""
+    colours the same way: every position and metric of every frame bitwise as in index order."""
     reference, contacts = _run("detection", device)
     ordered, ordered_contacts = _run("detection", device, coherent_order=True)
     assert ordered_contacts == contacts > 0
-    for k, (a, b) in enumerate(zip(reference, ordered)):
+    for k, ((a, ma), (b, mb)) in enumerate(zip(reference, ordered)):
         assert np.array_equal(a, b), f"frame {k}: moved by up to {np.abs(a - b).max():.3e} m"
+        assert all(np.array_equal(ma[name], mb[name]) for name in ma), f"frame {k}: metrics differ"
 
 
 def test_launch_order_is_a_spatially_coherent_permutation_per_scene():

@@ -53,13 +53,14 @@ class Crossings:
         self.bvh = wp.Bvh(self.lo, self.hi)
         self.out = wp.zeros(model.edge_count, dtype=wp.int32, device="cpu")
         self.none = wp.zeros((model.edge_count, 0), dtype=wp.int32, device="cpu")
+        self.order = wp.array(np.arange(model.edge_count, dtype=np.int32), device="cpu")  # index order
 
     def __call__(self, x) -> int:
         m = self.model
         wp.launch(face_bounds, m.face_count, inputs=[x, m.faces, self.lo, self.hi], device="cpu")
         self.bvh.refit()
         wp.launch(crossings, m.edge_count, inputs=[self.bvh.id, x, m.particle_scene, m.faces, m.edge_pairs, self.out,
-                                                   self.none], device="cpu")
+                                                   self.none, self.order], device="cpu")
         return int(self.out.numpy().sum())
 
 
@@ -83,7 +84,7 @@ def contour_steps(model, x, step: float, count: int, marked_out: list | None = N
         wp.launch(face_bounds, m.face_count, inputs=[x, m.faces, cross.lo, cross.hi], device="cpu")
         bvh.refit()
         wp.launch(U.contour_gradients, m.edge_count, inputs=[bvh.id, x, m.particle_scene, m.faces, m.edges, frozen,
-                                                             int(it > 0), marked, push, hits], device="cpu")
+                                                             int(it > 0), marked, push, hits, cross.order], device="cpu")
         if it == 0 and marked_out is not None:
             marked_out.append(int(marked.numpy().sum()))
         wp.launch(U.apply_untangle, m.particle_count, inputs=[push, hits, m.active, step, x], device="cpu")
