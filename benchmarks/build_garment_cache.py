@@ -47,6 +47,7 @@ def main() -> None:
     print(f"{n} garment instances on {len(plan.bodies)} bodies; cache {os.environ.get('DRAPE_CACHE_DIR', '(default)')}",
           flush=True)
     t0 = time.perf_counter()
+    plan.betas  # the body built (or loaded) here first: the workers then load it instead of each building it
     with ProcessPoolExecutor(args.workers, initializer=_init, initargs=(args.preset, args.config)) as pool:
         futures = [pool.submit(_build, g) for g in range(n)]
         for k, f in enumerate(as_completed(futures), 1):
