@@ -18,8 +18,8 @@ import io
 import math
 import struct
 
-MODULES = ("datagen.sim.kernels", "datagen.sim.detection_kernels", "datagen.sim.newton_kernels",
-           "datagen.sim.untangle_kernels", "datagen.sim.metrics")
+MODULES = ("datagen.sim.kernels", "datagen.sim.projection_kernels", "datagen.sim.detection_kernels",
+           "datagen.sim.newton_kernels", "datagen.sim.untangle_kernels", "datagen.sim.metrics")
 REGISTERS_PER_SM = 65536
 THREADS_PER_SM = 2048
 BLOCK = 256

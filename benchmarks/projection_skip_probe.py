@@ -1,4 +1,4 @@
-"""How many of the projection's inside tests the skip leaves out (``kernels.may_have_entered``), per
+"""How many of the projection's inside tests the skip leaves out (``projection_kernels.may_have_entered``), per
 frame, on the first scene of ``bench_sim.py prepare``'s inputs, and whether the positions are
 bitwise those of testing every vertex (``projection_skip=false``) in the same run.
 

@@ -45,7 +45,7 @@ compare)
   # SETS: space-separated variants of this tree, each a comma-separated list of SolverConfig KEY=VALUE
   # ("-": the defaults); BASE=none leaves the earlier tree out; TESTS=1 first runs the simulator's
   # CUDA-only tests (their output in $OUT/cuda_tests.txt)
-  [ "${TESTS:-0}" = 1 ] && python -m pytest -q -p no:cacheprovider -k cuda tests/sim/test_register_caps.py \
+  [ "${TESTS:-0}" = 1 ] && python -m pytest -q -p no:cacheprovider -k cuda tests/sim/test_launch_settings.py \
     tests/sim/test_projection_skip.py tests/sim/test_physics.py tests/sim/test_untangle.py 2>&1 | filter \
     > "$OUT/cuda_tests.txt"; [ -f "$OUT/cuda_tests.txt" ] && tail -3 "$OUT/cuda_tests.txt"
   trees=("${BASE:-.bench_base}"); [ "${BASE:-}" = none ] && trees=()

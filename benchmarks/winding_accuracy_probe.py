@@ -3,7 +3,7 @@
 warp's ``mesh_query_point_sign_winding_number(mesh, p, max_dist, accuracy, threshold)`` evaluates
 the fast winding number (Barill et al. 2018): a subtree of the mesh's tree counts as its dipole when
 the point is farther than β times the subtree's radius. drape's body projection asks it for every
-cloth vertex near the body every substep (``kernels.test_inside_body``); a smaller β visits
+cloth vertex near the body every substep (``projection_kernels.test_inside_body``); a smaller β visits
 fewer nodes. This probe poses drape's default body in the motions whose poses press body parts
 into each other (squat, sit_stand, lunge, box, dance_disco, kick, bend_forward, arm_circles; and the
 walk), scatters points within ``--within`` metres of the posed surface (each a random body vertex

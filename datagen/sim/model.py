@@ -205,8 +205,6 @@ class ClothModel:
     """Start of each vertex's neighbours in ``nbr``, int32 [N + 1]."""
     nbr: wp.array
     """Edge neighbours, sorted per vertex, int32 [2E]."""
-    colours: list
-    """Vertex ids of each colour, one int32 array per colour (swept in order)."""
     # bodies
     body_rest: wp.array
     """Bodies in their start pose [m], vec3 [B]."""
@@ -569,7 +567,7 @@ def _upload(host: ClothHostArrays, device: str, *, scene_count: int, scenes_with
             tri_stiff=f32(h.tri_stiff, vec5), tri_lock=f32(h.tri_lock, wp.vec2), edges=i32(h.edges),
             edge_pairs=i32(h.edge_pairs), rest_angle=f32(h.rest_angle), bend_k=f32(h.bend_k),
             v2f_offsets=i32(h.v2f_offsets), v2f=i32(h.v2f), v2e_offsets=i32(h.v2e_offsets), v2e=i32(h.v2e),
-            nbr_offsets=i32(h.nbr_offsets), nbr=i32(h.nbr), colours=[i32(c) for c in h.colours],
+            nbr_offsets=i32(h.nbr_offsets), nbr=i32(h.nbr),
             body_rest=f32(h.body_rest, wp.vec3), body_faces=i32(h.body_faces), body_face_part=i32(h.body_face_part),
             body_face_base=i32(h.body_face_range[:, 0]), body_face_border=i32(h.body_face_border))
 

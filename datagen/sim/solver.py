@@ -18,10 +18,10 @@ log = logging.getLogger(__name__)
 
 
 TRAVEL_CHUNK = 256
-"""Body vertices per thread of ``kernels.body_parts_moved``'s reductions."""
+"""Body vertices per thread of ``projection_kernels.body_parts_moved``'s reductions."""
 
 BIG_BOX = 1.0e30
-"""The empty bounding box's corners (+-) before ``kernels.body_parts_moved`` shrinks it onto a part."""
+"""The empty bounding box's corners (+-) before ``projection_kernels.body_parts_moved`` shrinks it onto a part."""
 
 
 def _part_vertices(body_faces: np.ndarray, face_part: np.ndarray, face_range: np.ndarray, body_ranges: np.ndarray,
@@ -45,7 +45,7 @@ def _part_vertices(body_faces: np.ndarray, face_part: np.ndarray, face_range: np
 
 def _reference_vertices(body_rest: np.ndarray, ranges: np.ndarray, scene_count: int) -> np.ndarray:
     """Per scene the body vertex nearest its rest body's centroid (global index; -1 for a scene
-    without a body): the origin whose moves ``kernels.may_have_entered`` subtracts, so a body that
+    without a body): the origin whose moves ``projection_kernels.may_have_entered`` subtracts, so a body that
     walks on moves its cloth's bound only by how its parts move about it."""
     ref = np.full(scene_count, -1, dtype=np.int32)
     for s, (b0, b1) in enumerate(np.asarray(ranges).reshape(-1, 2)[:scene_count]):
@@ -96,10 +96,10 @@ class SolverConfig:
             a load one vertex per sweep; woven cloth needs it carried across the garment at once.
         body_projection: at the end of every substep, move vertices that ended inside the body
             (winding-number test) out to its surface and take their inward velocity (see
-            ``kernels.test_inside_body`` and ``move_out_of_body``).
+            ``projection_kernels.test_inside_body`` and ``move_out_of_body``).
         projection_skip: let the projection's inside test skip a vertex that provably cannot have
             entered the body since its last test (its distance from the body then exceeds how far it
-            and the body have moved since; ``kernels.may_have_entered``). The result is the same as
+            and the body have moved since; ``projection_kernels.may_have_entered``). The result is the same as
             testing every vertex (tested bitwise); off only to measure what it saves.
         projection_reach: how far the projection's search for a way out (where the closest face's
             normal does not lead outside) may move a vertex [m].
@@ -156,18 +156,20 @@ class SolverConfig:
         register_caps: which kernels run as their register-capped copies
             (``detection_kernels.register_capped``: the same code under CUDA's
             ``__launch_bounds__``, with more threads in flight and a few spills; bitwise the same
-            results on the CPU, which ignores the bound; on CUDA not yet compared bitwise): ``none``; ``detection`` (the default: the two cloth-cloth queries and
-            the projection's inside test, 94 -> 80, 72 -> 64 and 80 -> 64 registers; on an H100
-            the frame takes 0.97x at 64 scenes and 0.94x at 256); ``all`` (those and the sweep
-            kernel, 116 -> 80 with spills: 1.02x and 1.11x the frame of no caps, slower).
+            results on the CPU, which ignores the bound; on CUDA not yet compared bitwise):
+            ``none``; ``detection`` (the default: the two cloth-cloth queries and the projection's
+            inside test, 94 -> 80, 72 -> 64 and 80 -> 64 registers; on an H100 the frame takes
+            0.97x at 64 scenes and 0.94x at 256); ``all`` (those and the sweep kernel, 116 -> 80
+            with spills: 1.02x and 1.11x the frame of no caps, slower).
         coherent_order: launch the tree queries (the cloth-cloth detection, the body contact
             query, the projection, the untangling, and the per-frame penetration and crossing
-            metrics) with one thread per vertex or edge in Morton order of the rest
-            shape (``model.launch_order``), and sort every sweep colour the same way, so the threads
-            of a warp hold cloth near each other; False launches them in index order, in which a
-            garment's 32 consecutive vertices span most of it. The results are the same either way,
-            bitwise (each thread writes its own element; contact lists are sorted and distances are
-            minima; tested). A candidate: its speed is for a GPU to decide.
+            metrics) with one thread per vertex or edge in Morton order of the rest shape
+            (``model.launch_order``), and sort every sweep colour the same way, so the threads of
+            a warp hold cloth near each other; False launches them in index order, in which a
+            garment's 32 consecutive vertices span most of it. The results are the same either
+            way, bitwise (each thread writes its own element; contact lists are sorted, distances
+            are minima and the untangling's pushes integer sums; tested). A candidate: its speed is
+            for a GPU to decide.
         cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
             CUDA graph and replay it: the same kernels in the same order, without Python's
             per-launch cost. Off, or on a CPU, every launch is made from Python.
@@ -242,8 +244,8 @@ class SolverConfig:
 GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
 """``SolverConfig.global_friction`` values and the code the global step's kernel takes."""
 
-REGISTER_CAPS = {"none": (), "detection": ("detect_vertex_triangle", "detect_edge_edge", "test_inside_body"),
-                 "all": ("detect_vertex_triangle", "detect_edge_edge", "test_inside_body", "solve_colour")}
+_CAPPED_DETECTION = ("detect_vertex_triangle", "detect_edge_edge", "test_inside_body")
+REGISTER_CAPS = {"none": (), "detection": _CAPPED_DETECTION, "all": (*_CAPPED_DETECTION, "solve_colour")}
 """``SolverConfig.register_caps`` values and the kernels each runs as their register-capped copies."""
 
 REFIT_STREAMS = 16
@@ -266,14 +268,16 @@ class SolverVBD:
 
         from datagen.sim import detection_kernels as D
         from datagen.sim import kernels as K
+        from datagen.sim import projection_kernels as PK
         from datagen.sim.model import launch_order, triangle_colours
 
         self.model = model
         self.config = config or SolverConfig()
-        self.K, self.D = K, D
+        self.K, self.D, self.PK = K, D, PK
         capped = REGISTER_CAPS[self.config.register_caps]
         # the kernels launched below, each its register-capped copy where the config asks for it
-        self._kernel = {name: getattr(K if hasattr(K, name) else D, name + ("_capped" if name in capped else ""))
+        home = {"detect_vertex_triangle": D, "detect_edge_edge": D, "test_inside_body": PK, "solve_colour": K}
+        self._kernel = {name: getattr(home[name], name + ("_capped" if name in capped else ""))
                         for name in REGISTER_CAPS["all"]}
         m = model
         n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
@@ -290,13 +294,10 @@ class SolverVBD:
             else:
                 self.vertex_order = wp.array(np.arange(n, dtype=np.int32), dtype=wp.int32)
                 self.edge_order = wp.array(np.arange(ne, dtype=np.int32), dtype=wp.int32)
-            if self.config.colour_hinge_wings and not self.config.coherent_order:
-                self.colours = m.colours  # the sweeps' colours
-            else:
-                cols = h.colours if self.config.colour_hinge_wings else triangle_colours(h)
-                if self.config.coherent_order:
-                    cols = [np.asarray(c)[np.argsort(rank[np.asarray(c)], kind="stable")] for c in cols]
-                self.colours = [wp.array(np.asarray(c, dtype=np.int32), dtype=wp.int32) for c in cols]
+            cols = h.colours if self.config.colour_hinge_wings else triangle_colours(h)  # the sweeps' colours
+            if self.config.coherent_order:
+                cols = [np.asarray(c)[np.argsort(rank[np.asarray(c)], kind="stable")] for c in cols]
+            self.colours = [wp.array(np.asarray(c, dtype=np.int32), dtype=wp.int32) for c in cols]
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
             self.min_dist = wp.zeros(n, dtype=float)
@@ -357,12 +358,12 @@ class SolverVBD:
             self.needed = wp.zeros(3, dtype=wp.int32)
             self.projected = wp.zeros(m.scene_count, dtype=wp.int32)
             self.projection_inside = wp.zeros(n, dtype=wp.int32)  # the projection's first pass found it inside
-            # the inside test's finds, for the move out (kernels.test_inside_body, move_out_of_body)
+            # the inside test's finds, for the move out (projection_kernels.test_inside_body, move_out_of_body)
             self.projection_pending = wp.zeros(n, dtype=wp.int32)
             self.projection_face = wp.zeros(n, dtype=wp.int32)
             self.projection_uv = wp.zeros(n, dtype=wp.vec2)
             # what lets the projection's first pass skip a vertex that cannot have entered the body
-            # since its last test (kernels.may_have_entered): per scene a reference body vertex (the
+            # since its last test (projection_kernels.may_have_entered): per scene a reference body vertex (the
             # one nearest the rest body's centroid; -1 without a body), and per body part its
             # vertices, its bounding box and its accumulated largest move relative to the reference;
             # per cloth vertex where its last test found it outside (relative to the reference) and
@@ -651,10 +652,10 @@ class SolverVBD:
                     P = m.body_part_count
                     self.part_lo.fill_(wp.vec3(BIG_BOX))
                     self.part_hi.fill_(wp.vec3(-BIG_BOX))
-                    wp.launch(K.body_parts_moved, (m.scene_count * P, self._travel_chunks), inputs=[
+                    wp.launch(self.PK.body_parts_moved, (m.scene_count * P, self._travel_chunks), inputs=[
                         self.body_prev_sub, self.body_sub, self.part_vertices, self.part_offsets, self.body_ref, P,
                         TRAVEL_CHUNK, self.body_step_max, self.part_lo, self.part_hi])
-                    wp.launch(K.add_travel, (m.scene_count, P), inputs=[self.body_step_max, self.body_travel])
+                    wp.launch(self.PK.add_travel, (m.scene_count, P), inputs=[self.body_step_max, self.body_travel])
                 wp.launch(K.forward_step, n, inputs=[x, v, m.mass, m.vertex_area, m.active, wp.vec3(*c.gravity),
                                                      c.air_drag, h, self.x_prev, self.y, state.pinned_target])
                 wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, m.body_face_part,
@@ -724,7 +725,7 @@ class SolverVBD:
                             self.body_ref, m.body_part_count, self.body_travel, self.part_lo, self.part_hi,
                             self.check_x, self.check_travel, self.check_bound, self.projection_skipped,
                             int(c.projection_skip), float(c.projection_accuracy), self.vertex_order])
-                        wp.launch(K.move_out_of_body, n, inputs=[
+                        wp.launch(self.PK.move_out_of_body, n, inputs=[
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
                             self.body_sub, 2.0 * c.body_query, self.body_radius, h, c.projection_reach, x, v,
                             self.projected, self.projection_pending, self.projection_face, self.projection_uv,

@@ -1,5 +1,5 @@
 """The projection's inside test skips only vertices that provably cannot have entered the body
-(``kernels.may_have_entered``): the result is bitwise that of testing every vertex."""
+(``projection_kernels.may_have_entered``): the result is bitwise that of testing every vertex."""
 
 from __future__ import annotations
 
