@@ -159,8 +159,13 @@ class SolverConfig:
             results on the CPU, which ignores the bound; on CUDA not yet compared bitwise):
             ``none``; ``detection`` (the default: the two cloth-cloth queries and the projection's
             inside test, 94 -> 80, 72 -> 64 and 80 -> 64 registers; on an H100 the frame takes
-            0.97x at 64 scenes and 0.94x at 256); ``all`` (those and the sweep kernel, 116 -> 80
-            with spills: 1.02x and 1.11x the frame of no caps, slower).
+            0.97x at 64 scenes and 0.94x at 256). Capping the old one-thread-per-vertex sweep
+            kernel too (116 -> 80 registers with spills) was slower, 1.02x and 1.11x, and is gone
+            with that kernel (``sweep_lanes``).
+        sweep_lanes: threads per vertex in the sweeps on a GPU (:mod:`datagen.sim.sweep_kernels`:
+            a block of this many threads shares a vertex's triangles, hinges, contact lists and
+            body planes and adds its sums in a fixed tree). A power of two up to 64; on a CPU a
+            block is one thread whatever this says (bitwise the one-thread-per-vertex result).
         coherent_order: launch the tree queries (the cloth-cloth detection, the body contact
             query, the projection, the untangling, and the per-frame penetration and crossing
             metrics) with one thread per vertex or edge in Morton order of the rest shape
@@ -208,6 +213,7 @@ class SolverConfig:
     global_friction: str = "lagged"
     colour_hinge_wings: bool = False
     register_caps: str = "detection"
+    sweep_lanes: int = field(default=16, metadata={"min": 1, "max": 64})
     coherent_order: bool = False
 
     def __post_init__(self):
@@ -227,6 +233,8 @@ class SolverConfig:
             raise InputError(f"untangle_iterations must be >= 1, got {self.untangle_iterations}")
         if self.register_caps not in REGISTER_CAPS:
             raise InputError(f"register_caps must be one of {', '.join(REGISTER_CAPS)}, got {self.register_caps!r}")
+        if int(self.sweep_lanes) not in (1, 2, 4, 8, 16, 32, 64):
+            raise InputError(f"sweep_lanes must be a power of two from 1 to 64, got {self.sweep_lanes}")
         if self.global_friction not in GLOBAL_FRICTION:
             raise InputError(f"global_friction must be one of {', '.join(GLOBAL_FRICTION)}, got {self.global_friction!r}")
         if not 0.0 < self.bound_fraction < 0.5:
@@ -245,7 +253,7 @@ GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
 """``SolverConfig.global_friction`` values and the code the global step's kernel takes."""
 
 _CAPPED_DETECTION = ("detect_vertex_triangle", "detect_edge_edge", "test_inside_body")
-REGISTER_CAPS = {"none": (), "detection": _CAPPED_DETECTION, "all": (*_CAPPED_DETECTION, "solve_colour")}
+REGISTER_CAPS = {"none": (), "detection": _CAPPED_DETECTION}
 """``SolverConfig.register_caps`` values and the kernels each runs as their register-capped copies."""
 
 REFIT_STREAMS = 16
@@ -269,16 +277,16 @@ class SolverVBD:
         from datagen.sim import detection_kernels as D
         from datagen.sim import kernels as K
         from datagen.sim import projection_kernels as PK
+        from datagen.sim import sweep_kernels as S
         from datagen.sim.model import launch_order, triangle_colours
 
         self.model = model
         self.config = config or SolverConfig()
-        self.K, self.D, self.PK = K, D, PK
+        self.K, self.D, self.PK, self.S = K, D, PK, S
         capped = REGISTER_CAPS[self.config.register_caps]
         # the kernels launched below, each its register-capped copy where the config asks for it
-        home = {"detect_vertex_triangle": D, "detect_edge_edge": D, "test_inside_body": PK, "solve_colour": K}
-        self._kernel = {name: getattr(home[name], name + ("_capped" if name in capped else ""))
-                        for name in REGISTER_CAPS["all"]}
+        home = {"detect_vertex_triangle": D, "detect_edge_edge": D, "test_inside_body": PK}
+        self._kernel = {name: getattr(home[name], name + ("_capped" if name in capped else "")) for name in home}
         m = model
         n, nf, ne, nb = m.particle_count, m.face_count, m.edge_count, m.body_vertex_count
         with wp.ScopedDevice(m.device):
@@ -516,6 +524,7 @@ class SolverVBD:
                 graphs.clear()
             wp.load_module(self.K, device=dev)  # compile before capturing
             wp.load_module(self.D, device=dev)
+            wp.load_module(self.S, device=dev, block_dim=int(self.config.sweep_lanes))
             if self.config.global_iterations:
                 from datagen.sim import newton_kernels
 
@@ -628,6 +637,22 @@ class SolverVBD:
             rz, rz_new = rz_new, rz
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
 
+    def _solve_colour(self, col, x, h: float, out) -> None:
+        """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``), a
+        block of ``sweep_lanes`` threads per vertex (:mod:`datagen.sim.sweep_kernels`)."""
+        import warp as wp
+
+        m, c = self.model, self.config
+        wp.launch_tiled(self.S.solve_colour, dim=[col.shape[0]], block_dim=c.sweep_lanes, device=m.device, inputs=[
+            col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
+            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
+            m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
+            self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
+            self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
+            self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
+            c.friction_velocity * h, h, m.vertex_area, int(c.body_friction), c.friction_pressure,
+            self.friction_used, out])
+
     def _step(self, state, control, dt: float) -> None:
         import warp as wp
 
@@ -687,15 +712,7 @@ class SolverVBD:
                         wp.copy(self.x_nm1, x)
                         omega, cheb = 1.0, 0
                     for col in self.colours:
-                        wp.launch(self._kernel["solve_colour"], col.shape[0], inputs=[
-                            col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
-                            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
-                            m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-                            self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
-                            self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
-                            self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
-                            c.friction_velocity * h, h, m.vertex_area, int(c.body_friction), c.friction_pressure,
-                            self.friction_used, self.x_tmp])
+                        self._solve_colour(col, x, h, self.x_tmp)
                         wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
                     omega = 1.0 if cheb < 1 else (2.0 / (2.0 - rho * rho) if cheb == 1 else 4.0 / (4.0 - rho * rho * omega))
                     cheb += 1
