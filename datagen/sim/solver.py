@@ -163,9 +163,9 @@ class SolverConfig:
             kernel too (116 -> 80 registers with spills) was slower, 1.02x and 1.11x, and is gone
             with that kernel (``sweep_lanes``).
         sweep_lanes: threads per vertex in the sweeps on a GPU (:mod:`datagen.sim.sweep_kernels`:
-            a block of this many threads shares a vertex's triangles, hinges, contact lists and
-            body planes and adds its sums in a fixed tree). A power of two up to 64; on a CPU a
-            block is one thread whatever this says (bitwise the one-thread-per-vertex result).
+            this many threads of a warp share a vertex's triangles, hinges, contact lists and body
+            planes and add their sums by shuffles in a fixed order). A power of two up to 32; on a
+            CPU one thread walks each vertex whatever this says.
         coherent_order: launch the tree queries (the cloth-cloth detection, the body contact
             query, the projection, the untangling, and the per-frame penetration and crossing
             metrics) with one thread per vertex or edge in Morton order of the rest shape
@@ -213,7 +213,7 @@ class SolverConfig:
     global_friction: str = "lagged"
     colour_hinge_wings: bool = False
     register_caps: str = "detection"
-    sweep_lanes: int = field(default=16, metadata={"min": 1, "max": 64})
+    sweep_lanes: int = field(default=16, metadata={"min": 1, "max": 32})
     coherent_order: bool = False
 
     def __post_init__(self):
@@ -233,8 +233,8 @@ class SolverConfig:
             raise InputError(f"untangle_iterations must be >= 1, got {self.untangle_iterations}")
         if self.register_caps not in REGISTER_CAPS:
             raise InputError(f"register_caps must be one of {', '.join(REGISTER_CAPS)}, got {self.register_caps!r}")
-        if int(self.sweep_lanes) not in (1, 2, 4, 8, 16, 32, 64):
-            raise InputError(f"sweep_lanes must be a power of two from 1 to 64, got {self.sweep_lanes}")
+        if int(self.sweep_lanes) not in (1, 2, 4, 8, 16, 32):
+            raise InputError(f"sweep_lanes must be a power of two from 1 to 32 (a warp), got {self.sweep_lanes}")
         if self.global_friction not in GLOBAL_FRICTION:
             raise InputError(f"global_friction must be one of {', '.join(GLOBAL_FRICTION)}, got {self.global_friction!r}")
         if not 0.0 < self.bound_fraction < 0.5:
@@ -524,7 +524,7 @@ class SolverVBD:
                 graphs.clear()
             wp.load_module(self.K, device=dev)  # compile before capturing
             wp.load_module(self.D, device=dev)
-            wp.load_module(self.S, device=dev, block_dim=int(self.config.sweep_lanes))
+            wp.load_module(self.S, device=dev)
             if self.config.global_iterations:
                 from datagen.sim import newton_kernels
 
@@ -643,7 +643,11 @@ class SolverVBD:
         import warp as wp
 
         m, c = self.model, self.config
-        wp.launch_tiled(self.S.solve_colour, dim=[col.shape[0]], block_dim=c.sweep_lanes, device=m.device, inputs=[
+        lanes = int(c.sweep_lanes) if wp.get_device(m.device).is_cuda else 1  # a CPU thread walks a vertex alone
+        threads = col.shape[0] * lanes
+        if lanes > 1:  # whole warps: every thread of a warp takes part in the lanes' shuffles
+            threads = -(-threads // self.S.WARP_SIZE) * self.S.WARP_SIZE
+        wp.launch(self.S.solve_colour, threads, device=m.device, inputs=[
             col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
             m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
             m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
@@ -651,7 +655,7 @@ class SolverVBD:
             self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
             self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
             c.friction_velocity * h, h, m.vertex_area, int(c.body_friction), c.friction_pressure,
-            self.friction_used, out])
+            self.friction_used, lanes, out])
 
     def _step(self, state, control, dt: float) -> None:
         import warp as wp

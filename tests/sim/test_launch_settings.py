@@ -2,8 +2,8 @@
 runs some kernels as register-capped copies of themselves (``detection_kernels.register_capped``: the
 same code under CUDA's ``__launch_bounds__``), ``SolverConfig.coherent_order`` launches the tree
 queries in Morton order (``model.launch_order``); the same result, bitwise. ``SolverConfig.sweep_lanes``
-splits a vertex's sums in the sweeps over a block of threads: the same result up to the order of
-the additions, and bitwise where a block is one thread (a CPU)."""
+splits a vertex's sums in the sweeps over several threads of a warp: the same result up to the
+order of the additions (on a CPU one thread walks each vertex)."""
 
 from __future__ import annotations
 
@@ -67,17 +67,18 @@ def test_register_caps_are_checked():
     assert set(REGISTER_CAPS) == {"none", "detection"}
     with pytest.raises(InputError, match="register_caps must be one of none, detection"):
         SolverConfig(register_caps="some")
-    with pytest.raises(InputError, match="sweep_lanes must be a power of two"):
-        SolverConfig(sweep_lanes=12)
+    for lanes in (12, 64):
+        with pytest.raises(InputError, match="sweep_lanes must be a power of two"):
+            SolverConfig(sweep_lanes=lanes)
 
 
-def test_sweep_lanes_split_the_sums_not_the_result():
-    """Every colour's sweep from one state (two frames in: cloth-cloth contacts and body planes) with
-    warp's CPU blocks on (``warp.config.enable_cpu_blocks``, a GPU's shape) and 16 or 32 threads a
-    vertex gives one thread a vertex's steps up to rounding (the sums are added in another order);
-    with them off a block is one thread and the lanes change nothing, bitwise. (Whole runs are not
-    compared: this scene of two layers landing is chaotic, and a change of 1e-7 in the Chebyshev
-    radius moves it by a millimetre a frame later.)"""
+@pytest.mark.parametrize("device", _devices())
+def test_sweep_lanes_split_the_sums_not_the_result(device):
+    """Every colour's sweep from one state (two frames in: cloth-cloth contacts and body planes)
+    with 2 to 32 threads a vertex gives one thread a vertex's steps up to rounding (the sums are
+    added in another order); on a CPU one thread walks each vertex whatever ``sweep_lanes`` says,
+    bitwise. (Whole runs are not compared: this scene of two layers landing is chaotic, and a change
+    of 1e-7 in the Chebyshev radius moves it by a millimetre a frame later.)"""
     import warp as wp
 
     from datagen.sim import solver as solver_module
@@ -91,7 +92,7 @@ def test_sweep_lanes_split_the_sums_not_the_result():
 
     solver_module.SolverVBD.__init__ = keep
     try:
-        _run("detection", "cpu", frames=2)
+        _run("detection", device, frames=2)
     finally:
         solver_module.SolverVBD.__init__ = init
     solver = built[0]
@@ -99,27 +100,25 @@ def test_sweep_lanes_split_the_sums_not_the_result():
     h = 1.0 / FPS / solver.config.substeps
     x = solver.x_nm1  # the last sweep's start
 
-    def sweep(lanes: int, blocks: bool) -> np.ndarray:
-        saved = wp.config.enable_cpu_blocks
-        wp.config.enable_cpu_blocks = blocks
-        try:
-            solver.config = dataclasses.replace(solver.config, sweep_lanes=lanes)
-            outs = []
-            for col in solver.colours:
-                out = wp.clone(x)
-                solver._solve_colour(col, x, h, out)
-                outs.append(out.numpy()[col.numpy()])
-            return np.concatenate(outs)
-        finally:
-            wp.config.enable_cpu_blocks = saved
+    def sweep(lanes: int) -> np.ndarray:
+        solver.config = dataclasses.replace(solver.config, sweep_lanes=lanes)
+        outs = []
+        for col in solver.colours:
+            out = wp.clone(x)
+            solver._solve_colour(col, x, h, out)
+            outs.append(out.numpy()[col.numpy()])
+        return np.concatenate(outs)
 
-    one = sweep(1, False)
+    one = sweep(1)
     moved = np.abs(one - np.concatenate([x.numpy()[c.numpy()] for c in solver.colours])).max()
     assert moved > 1.0e-5  # the sweep does move the cloth
-    assert np.array_equal(sweep(16, False), one)
-    for lanes in (16, 32):
-        split = sweep(lanes, True)
-        assert np.abs(split - one).max() < 1.0e-4 * moved, f"{lanes} lanes"
+    for lanes in (2, 16, 32):
+        split = sweep(lanes)
+        if device == "cpu":
+            assert np.array_equal(split, one), f"{lanes} lanes on the CPU"
+        else:
+            assert np.abs(split - one).max() < 1.0e-4 * moved, f"{lanes} lanes"
+            assert np.array_equal(sweep(lanes), split)  # the same bits again
 
 
 @pytest.mark.parametrize("device", _devices())
