@@ -26,7 +26,10 @@ How Newton's side is set up (newton 1.8):
   against the posed body with its velocity (friction), at distance particle radius (material
   thickness + drape's body margin) plus the soft-contact margin;
 - self-contact (``particle_enable_self_contact``) with margin = drape's ``self_radius`` and gap =
-  drape's ``self_query`` - ``self_radius``.
+  drape's ``self_query`` - ``self_radius``; its topological contact filters (two rings) are built by
+  Newton's own code for world 0 and copied to the other worlds, which are the same mesh
+  (:class:`_WorldFilters`; set-up only, not timed: built for all 256 worlds they took minutes;
+  ``--check-filters`` compares both ways at 3 worlds first).
 Newton is not a dependency of drape: ``pip install -e .[newton]`` (or ``pip install newton``) to run this benchmark.
 """
 
@@ -145,8 +148,99 @@ def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure)
     return {"ms_per_frame": ms, "garment_frames_per_s": 1000 * n / ms, **_summary(mets, d["recorded_from"])}
 
 
-def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure, substeps: int = 10,
-               iterations: int = 10) -> dict:
+class _WorldFilters:
+    """Newton's topological self-contact filters, built for one world and copied to the others.
+
+    ``SolverVBD`` builds, in Python, per vertex the triangles and per edge the edges within two
+    rings (``tri_mesh_collision.build_vertex_n_ring_tris_collision_filter`` and
+    ``build_edge_n_ring_edge_collision_filter``): 35 s for 64 worlds of the T-shirt and 144 s for 256
+    on a 2-core CPU, set-up that is not timed but that outlasted a device call. Every world of this
+    benchmark is the same mesh at offsets of its vertex, triangle and edge counts, so the filters of
+    world w are world 0's shifted by w times those counts. While this context is open, the two
+    builders check that the mesh they are given is that repetition (else they build it Newton's
+    way) and return the copies. ``check`` builds both ways for a small batch and compares them
+    (``--check-filters``)."""
+
+    copied = 0
+    """Filters copied (not built) since the module was loaded, for ``check_world_filters``."""
+
+    def __init__(self, worlds: int, vertices: int, triangles: int, edges: int):
+        self.worlds, self.nv, self.nt, self.ne = worlds, vertices, triangles, edges
+
+    class Copies(list):
+        """World 0's filter sets standing for ``worlds`` copies shifted by ``shift`` each; only
+        Newton's ``set_to_csr`` reads them (patched to tile world 0's rows)."""
+
+        def __init__(self, one: list, worlds: int, shift: int):
+            super().__init__(one)
+            self.worlds, self.shift = worlds, shift
+
+    def __enter__(self):
+        from newton._src.geometry import tri_mesh_collision as T
+
+        self.T = T
+        self.saved = (T.build_vertex_n_ring_tris_collision_filter, T.build_edge_n_ring_edge_collision_filter,
+                      T.set_to_csr)
+        vt, ee, csr = self.saved
+        T.build_vertex_n_ring_tris_collision_filter = lambda n, count, edges, *adj: self._vertex(vt, n, count, edges, *adj)
+        T.build_edge_n_ring_edge_collision_filter = lambda n, edges, *adj: self._edge(ee, n, edges, *adj)
+        T.set_to_csr = lambda sets, dtype=np.int32, sort=True: self._csr(csr, sets, dtype, sort)
+        return self
+
+    def __exit__(self, *exc):
+        (self.T.build_vertex_n_ring_tris_collision_filter, self.T.build_edge_n_ring_edge_collision_filter,
+         self.T.set_to_csr) = self.saved
+
+    @staticmethod
+    def _csr(set_to_csr, sets, dtype, sort):
+        """Newton's CSR of the rows of every world: world 0's rows, shifted (sorted rows stay sorted)."""
+        if not isinstance(sets, _WorldFilters.Copies) or not sort:
+            return set_to_csr(sets, dtype, sort)
+        flat, offsets = set_to_csr(list(sets), dtype, sort)
+        total = int(offsets[-1])
+        flat_all = np.concatenate([flat + w * sets.shift for w in range(sets.worlds)]).astype(dtype)
+        offsets_all = np.concatenate([offsets[:-1] + w * total for w in range(sets.worlds)]
+                                     + [np.array([sets.worlds * total])]).astype(dtype)
+        return flat_all, offsets_all
+
+    def _repeats(self, edges: np.ndarray) -> bool:
+        e = np.asarray(edges)
+        if self.worlds < 2 or len(e) != self.worlds * self.ne:
+            return False
+        one = e[:self.ne]
+        shift = np.where(one >= 0, self.nv, 0)
+        return all(np.array_equal(e[w * self.ne:(w + 1) * self.ne], one + w * shift) for w in range(self.worlds))
+
+    def _one_world(self, v_adj: np.ndarray, offsets: np.ndarray, rows: int):
+        """The first ``rows`` rows of a CSR adjacency (world 0's vertices)."""
+        offsets = np.asarray(offsets)[:rows + 1]
+        return np.asarray(v_adj)[:int(offsets[-1])], offsets
+
+    def _vertex(self, build, n, count, edges, v_adj_edges, v_adj_edges_offsets, v_adj_tris, v_adj_tris_offsets):
+        if count != self.worlds * self.nv or not self._repeats(edges):
+            return build(n, count, edges, v_adj_edges, v_adj_edges_offsets, v_adj_tris, v_adj_tris_offsets)
+        ae, aeo = self._one_world(v_adj_edges, v_adj_edges_offsets, self.nv)
+        at, ato = self._one_world(v_adj_tris, v_adj_tris_offsets, self.nv)
+        one = build(n, self.nv, np.asarray(edges)[:self.ne], ae, aeo, at, ato)
+        if one is None:
+            return None
+        _WorldFilters.copied += 1
+        return _WorldFilters.Copies(one, self.worlds, self.nt)
+
+    def _edge(self, build, n, edges, v_adj_edges, v_adj_edges_offsets):
+        if not self._repeats(edges):
+            return build(n, edges, v_adj_edges, v_adj_edges_offsets)
+        ae, aeo = self._one_world(v_adj_edges, v_adj_edges_offsets, self.nv)
+        one = build(n, np.asarray(edges)[:self.ne], ae, aeo)
+        if one is None:
+            return None
+        _WorldFilters.copied += 1
+        return _WorldFilters.Copies(one, self.worlds, self.ne)
+
+
+def _newton_setup(d, n: int, self_col: bool, device, iterations: int, replicate: bool = True):
+    """Newton's model of n worlds of the scene, its collision pipeline and its VBD solver (the
+    self-contact filters copied from world 0 when ``replicate``: :class:`_WorldFilters`)."""
     import newton
     import warp as wp
 
@@ -207,12 +301,43 @@ def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure
 
         pipeline = newton.CollisionPipeline(model, soft_contact_gap=cfg.body_query)
         contacts = pipeline.contacts()
-        solver = newton.solvers.SolverVBD(
-            model, iterations=iterations, particle_enable_self_contact=self_col,
-            particle_self_contact_margin=cfg.self_radius, particle_self_contact_gap=cfg.self_query - cfg.self_radius)
-        s0, s1 = model.state(), model.state()
-        control = model.control()
+        with _WorldFilters(n if replicate else 0, len(d["garment"]), len(d["faces"]), model.edge_count // n):
+            solver = newton.solvers.SolverVBD(
+                model, iterations=iterations, particle_enable_self_contact=self_col,
+                particle_self_contact_margin=cfg.self_radius,
+                particle_self_contact_gap=cfg.self_query - cfg.self_radius)
     mem = (wp.get_mempool_used_mem_current(dev) - mem0) / n / 2**20 if dev.is_cuda else float("nan")
+
+    return model, solver, pipeline, contacts, meshes, points, vels, start, end, mem
+
+
+def check_world_filters(d, worlds: int = 3) -> None:
+    """Newton's self-contact filters for ``worlds`` worlds on the CPU, built its way and copied from
+    world 0 (:class:`_WorldFilters`): the same lists, or an error."""
+    before = _WorldFilters.copied
+    built = [_newton_setup(d, worlds, True, "cpu", 1, replicate=r)[1].trimesh_collision_detector for r in (False, True)]
+    if _WorldFilters.copied != before + 2:
+        raise SystemExit("the filters were not copied: the worlds are not one mesh repeated")
+    names = ("vertex_triangle_filtering_list", "vertex_triangle_filtering_list_offsets", "edge_filtering_list",
+             "edge_filtering_list_offsets")
+    for name in names:
+        a, b = (getattr(x, name).numpy() for x in built)
+        if not np.array_equal(a, b):
+            raise SystemExit(f"copied filters differ from Newton's: {name}")
+    print(f"Newton's self-contact filters for {worlds} worlds: copied from world 0 = built by Newton "
+          f"({len(built[0].edge_filtering_list.numpy())} edge-edge and "
+          f"{len(built[0].vertex_triangle_filtering_list.numpy())} vertex-triangle entries)", flush=True)
+
+
+def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure, substeps: int = 10,
+               iterations: int = 10) -> dict:
+    import warp as wp
+
+    model, solver, pipeline, contacts, meshes, points, vels, start, end, mem = _newton_setup(d, n, self_col, device,
+                                                                                           iterations)
+    s0, s1 = model.state(), model.state()
+    control = model.control()
+    body, nb = d["body"], int(d["body_vertices"])
 
     sub_dt = 1 / 30 / substeps
     nv = len(d["garment"])
@@ -269,6 +394,8 @@ def main() -> None:
     ap.add_argument("--self", default="on,off", help="self-collision settings to run: on, off or on,off")
     ap.add_argument("--solvers", default="drape,newton")
     ap.add_argument("--per-frame", action="store_true", help="print scene 0's metrics for every frame")
+    ap.add_argument("--check-filters", action="store_true",
+                    help="first check, on the CPU at 3 worlds, that the copied self-contact filters are Newton's own")
     ap.add_argument("--drape-option", action="append", default=[], metavar="KEY=VALUE",
                     help="a SolverConfig field for drape's solver (e.g. body_projection=false); repeatable")
     args = ap.parse_args()
@@ -303,6 +430,8 @@ def main() -> None:
           f"{cfg.substeps} substeps x {cfg.iterations} iterations (both solvers)", flush=True)
     head = (f"{'solver':>7} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
             f"{'max pen v':>9} {'depth mm':>8} {'self-x':>6} {'stretch':>8} {'nan':>4}")
+    if args.check_filters:
+        check_world_filters(d)
     print(head, flush=True)
     for self_col in [s == "on" for s in args.self.split(",")]:
         for n in [int(b) for b in args.batches.split(",")]:

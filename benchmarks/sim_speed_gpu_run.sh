@@ -72,7 +72,7 @@ figures)
   sets=(); opts=(); for kv in ${SET//,/ }; do sets+=(--set "$kv"); opts+=(--drape-option "$kv"); done  # SET: as in compare
   step() { echo "$(date +%T) $1 exit $2" >> "$W/progress"; }
   [ "${NEWTON:-1}" = 1 ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda \
-    --batches ${NEWTON_BATCHES:-64,256} --self on,off --frames 40 "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
+    --batches ${NEWTON_BATCHES:-64,256} --self ${NEWTON_SELF:-on,off} --frames 40 --check-filters "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
   python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off "${sets[@]}" 2>&1 \
     | filter > "$W/throughput.txt"; step throughput $?
   [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
