@@ -166,8 +166,8 @@ class SolverConfig:
             this many threads of a warp share a vertex's triangles, hinges, contact lists and body
             planes and add their sums by shuffles in a fixed order). A power of two up to 32; on a
             CPU one thread walks each vertex whatever this says. On an H100 at 64 scenes (with
-            ``coherent_order``) a sweep launch takes 100 us at 4 lanes, 110 at 1 (the one-thread
-            kernel: 112), 113 at 8 and 164 at 16; the frame 311.3 ms against 329.3 for the
+            ``coherent_order``) a sweep launch takes 100 us at 4 lanes, 119 at 1 (the one-thread
+            kernel: 112), 113 at 8 and 168 at 16; the frame 311.3 ms against 329.3 for the
             one-thread kernel without ``coherent_order``, in one run (``docs/simulator.md``).
         coherent_order: launch the tree queries (the cloth-cloth detection, the body contact
             query, the projection, the untangling, and the per-frame penetration and crossing
@@ -642,8 +642,9 @@ class SolverVBD:
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
 
     def _solve_colour(self, col, x, h: float, out) -> None:
-        """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``), a
-        block of ``sweep_lanes`` threads per vertex (:mod:`datagen.sim.sweep_kernels`)."""
+        """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``),
+        ``sweep_lanes`` threads of a warp per vertex on a GPU, one on a CPU
+        (:mod:`datagen.sim.sweep_kernels`)."""
         import warp as wp
 
         m, c = self.model, self.config
