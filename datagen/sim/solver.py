@@ -297,18 +297,17 @@ class SolverVBD:
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
             h = m.host
-            if self.config.coherent_order:  # threads of one warp on cloth near each other (launch_order)
-                self.vertex_order = wp.array(launch_order(h.rest_positions, h.particle_range), dtype=wp.int32)
-                self.edge_order = wp.array(launch_order(np.asarray(h.rest_positions)[np.asarray(h.edge_pairs)].mean(1),
-                                                        h.edge_range), dtype=wp.int32)
-                rank = np.empty(n, dtype=np.int64)
-                rank[self.vertex_order.numpy()] = np.arange(n)
-            else:
-                self.vertex_order = wp.array(np.arange(n, dtype=np.int32), dtype=wp.int32)
-                self.edge_order = wp.array(np.arange(ne, dtype=np.int32), dtype=wp.int32)
             cols = h.colours if self.config.colour_hinge_wings else triangle_colours(h)  # the sweeps' colours
-            if self.config.coherent_order:
+            if self.config.coherent_order:  # threads of one warp on cloth near each other (launch_order)
+                vertex_order = launch_order(h.rest_positions, h.particle_range)
+                edge_order = launch_order(np.asarray(h.rest_positions)[np.asarray(h.edge_pairs)].mean(1), h.edge_range)
+                rank = np.empty(n, dtype=np.int64)
+                rank[vertex_order] = np.arange(n)
                 cols = [np.asarray(c)[np.argsort(rank[np.asarray(c)], kind="stable")] for c in cols]
+            else:
+                vertex_order, edge_order = np.arange(n, dtype=np.int32), np.arange(ne, dtype=np.int32)
+            self.vertex_order = wp.array(vertex_order, dtype=wp.int32)
+            self.edge_order = wp.array(edge_order, dtype=wp.int32)
             self.colours = [wp.array(np.asarray(c, dtype=np.int32), dtype=wp.int32) for c in cols]
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
