@@ -30,12 +30,18 @@ How Newton's side is set up (newton 1.8):
   Newton's own code for world 0 and copied to the other worlds, which are the same mesh
   (:class:`_WorldFilters`; set-up only, not timed: built for all 256 worlds they took minutes;
   ``--check-filters`` compares both ways at 3 worlds first).
+- how it is launched (``--newton-launch``): ``python``, every substep from Python and the body
+  meshes refitted one after another (the earlier sessions' figures), or ``graph``, as drape's solver
+  runs: a frame's substeps captured once as a CUDA graph and replayed, the refits spread over CUDA
+  streams (``solver.REFIT_STREAMS``) inside it; ``--profile K`` prints each solver's top K kernels over
+  one more frame launched directly.
 Newton is not a dependency of drape: ``pip install -e .[newton]`` (or ``pip install newton``) to run this benchmark.
 """
 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import pickle
 import time
 
@@ -112,6 +118,29 @@ class _Measure:
 
 
 DRAPE_OPTIONS: dict = {}
+PROFILE = 0
+"""Kernels to print per solver after its timed frames (``--profile``; 0: none)."""
+
+
+def _profile(name: str, fn) -> None:
+    """One more frame, ``fn``, launched directly under warp's CUDA kernel timers: its top ``PROFILE``
+    kernels by time (warp's builtin ones, such as the BVH and mesh refits, included)."""
+    import warp as wp
+
+    if not PROFILE or not wp.get_device().is_cuda:
+        return
+    wp.synchronize()
+    wp.timing_begin(cuda_filter=wp.TIMING_KERNEL | wp.TIMING_KERNEL_BUILTIN | wp.TIMING_MEMCPY | wp.TIMING_MEMSET)
+    fn()
+    times: dict[str, list] = {}
+    for r in wp.timing_end():
+        times.setdefault(r.name, []).append(r.elapsed)
+    total = sum(sum(v) for v in times.values())
+    print(f"  {name}: one frame launched directly, {total:.1f} ms of kernels in {sum(map(len, times.values()))} launches",
+          flush=True)
+    for k, v in sorted(times.items(), key=lambda kv: -sum(kv[1]))[:PROFILE]:
+        print(f"    {k[:52]:<52} {len(v):6d} launches {sum(v):8.2f} ms {1000 * sum(v) / len(v):8.1f} us/launch",
+              flush=True)
 
 
 def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure) -> dict:
@@ -144,6 +173,11 @@ def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure)
         a, c = c, a
         rec.append((a.positions.numpy()[:nv].copy(), a.velocities.numpy()[:nv].copy()))
     ms = 1000 * elapsed / (frames - WARM_FRAMES)
+
+    def direct():
+        solver.config = dataclasses.replace(solver.config, cuda_graph=False)
+        solver.step(a, c, ctrl, 1 / 30)
+    _profile(f"drape, {n} scenes, self-collision {'on' if self_col else 'off'}", direct)
     mets = [measure(p, v, body(f + 1)) for f, (p, v) in enumerate(rec)]
     return {"ms_per_frame": ms, "garment_frames_per_s": 1000 * n / ms, **_summary(mets, d["recorded_from"])}
 
@@ -330,36 +364,76 @@ def check_world_filters(d, worlds: int = 3) -> None:
 
 
 def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure, substeps: int = 10,
-               iterations: int = 10) -> dict:
+               iterations: int = 10, graph: bool = False) -> dict:
+    """Newton's side. ``graph`` False: every substep launched from Python, the body meshes refitted
+    one after another (as in the earlier sessions' figures). True (CUDA only): as drape's solver runs,
+    a frame's substeps captured once as a CUDA graph and replayed, and the body meshes' refits spread
+    over ``REFIT_STREAMS`` CUDA streams that fork from and join the main stream inside the graph."""
     import warp as wp
+
+    from datagen.sim.solver import REFIT_STREAMS
 
     model, solver, pipeline, contacts, meshes, points, vels, start, end, mem = _newton_setup(d, n, self_col, device,
                                                                                            iterations)
     s0, s1 = model.state(), model.state()
     control = model.control()
     body, nb = d["body"], int(d["body_vertices"])
+    dev = wp.get_device(device)
+    if graph and not dev.is_cuda:
+        raise SystemExit("--newton-launch graph needs a CUDA device")
+    streams = [wp.Stream(dev) for _ in range(min(REFIT_STREAMS, n))] if graph else []
+
+    def refit() -> None:
+        if not streams:
+            for m in meshes:
+                m.refit()
+            return
+        main = wp.get_stream(dev)
+        for st in streams:
+            st.wait_stream(main)
+        for k, m in enumerate(meshes):
+            with wp.ScopedStream(streams[k % len(streams)], sync_enter=False):
+                m.refit()
+        for st in streams:
+            main.wait_stream(st)
 
     sub_dt = 1 / 30 / substeps
+
+    def frame(a, b):
+        for k in range(substeps):
+            wp.launch(_lerp_body, n * nb, inputs=[start, end, (k + 1) / substeps, 1.0 / (substeps * sub_dt)],
+                      outputs=[points, vels], device=device)
+            refit()
+            pipeline.collide(a, contacts)
+            solver.step(a, b, control, contacts, sub_dt)
+            a, b = b, a
+        wp.copy(start, end)
+        return a, b
+
+    graphs: dict = {}  # by id of the frame's input state: the states alternate when substeps is odd
     nv = len(d["garment"])
     rec, elapsed = [], 0.0
     for f in range(1, frames + 1):
         end.assign(np.tile(body(f).astype(np.float32), (n, 1)))
         wp.synchronize()
         t = time.perf_counter()
-        for k in range(substeps):
-            wp.launch(_lerp_body, n * nb, inputs=[start, end, (k + 1) / substeps, 1.0 / (substeps * sub_dt)],
-                      outputs=[points, vels], device=device)
-            for m in meshes:
-                m.refit()
-            pipeline.collide(s0, contacts)
-            solver.step(s0, s1, control, contacts, sub_dt)
-            s0, s1 = s1, s0
-        wp.copy(start, end)
+        if graph and f > 1:  # frame 1 launched directly: Newton allocates what it needs on first use
+            key = id(s0)
+            if key not in graphs:
+                with wp.ScopedCapture(device=dev) as cap:
+                    out = frame(s0, s1)
+                graphs[key] = (cap.graph, out)
+            g, (s0, s1) = graphs[key]
+            wp.capture_launch(g)
+        else:
+            s0, s1 = frame(s0, s1)
         wp.synchronize()
         if f > WARM_FRAMES:
             elapsed += time.perf_counter() - t
         rec.append((s0.particle_q.numpy()[:nv].copy(), s0.particle_qd.numpy()[:nv].copy()))
     ms = 1000 * elapsed / (frames - WARM_FRAMES)
+    _profile(f"Newton, {n} worlds, self-contact {'on' if self_col else 'off'}, "
+             f"{'refits on streams' if streams else 'refits one after another'}", lambda: frame(s0, s1))
     mets = [measure(p, v, body(f + 1)) for f, (p, v) in enumerate(rec)]
     return {"ms_per_frame": ms, "garment_frames_per_s": 1000 * n / ms, "mb_per_scene": mem,
             **_summary(mets, d["recorded_from"])}
@@ -382,11 +456,12 @@ _lerp_body = None
 PER_FRAME = False
 WARM_FRAMES = 2
 """Frames neither solver is timed on: the first compiles kernels, and drape's solver captures a CUDA
-graph on each of its first two (its two states alternate as input and output, one graph each)."""
+graph on each of its first two (its two states alternate as input and output, one graph each);
+Newton's, with ``--newton-launch graph``, captures its frame graph on frame 2."""
 
 
 def main() -> None:
-    global _lerp_body, PER_FRAME
+    global _lerp_body, PER_FRAME, PROFILE
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--inputs", default="runs.pkl", help="scenes from bench_sim.py prepare-runs")
     ap.add_argument("--scene", default="tshirt/walk", help="which of them")
@@ -396,13 +471,23 @@ def main() -> None:
                     help="simulated frames to run (0: the whole schedule); the first two are not timed (WARM_FRAMES)")
     ap.add_argument("--self", default="on,off", help="self-collision settings to run: on, off or on,off")
     ap.add_argument("--solvers", default="drape,newton")
+    ap.add_argument("--newton-launch", default="python",
+                    help="how Newton's substeps are launched: python (each from Python, the body meshes refitted one "
+                         "after another), graph (a frame captured as a CUDA graph, the refits on CUDA streams, as "
+                         "drape's solver runs), or python,graph for both")
     ap.add_argument("--per-frame", action="store_true", help="print scene 0's metrics for every frame")
+    ap.add_argument("--profile", type=int, default=0, metavar="K",
+                    help="on CUDA, after each solver's timed frames, one more frame launched directly under warp's "
+                         "kernel timers: its top K kernels")
     ap.add_argument("--check-filters", action="store_true",
                     help="first check, on the CPU at 3 worlds, that the copied self-contact filters are Newton's own")
     ap.add_argument("--drape-option", action="append", default=[], metavar="KEY=VALUE",
                     help="a SolverConfig field for drape's solver (e.g. body_projection=false); repeatable")
     args = ap.parse_args()
     PER_FRAME = args.per_frame
+    PROFILE = args.profile
+    if not set(args.newton_launch.split(",")) <= {"python", "graph"}:
+        raise SystemExit(f"--newton-launch takes python, graph or python,graph, not {args.newton_launch!r}")
     from datagen.config import load_config, parse_assignments
     from datagen.sim.solver import SolverConfig
 
@@ -433,7 +518,7 @@ def main() -> None:
           f"{len(d['garment'])} vertices, {len(d['faces'])} faces, {d['material']}; body {d['body_vertices']} vertices; "
           f"{frames} frames at 30 fps ({frames - WARM_FRAMES} timed; recorded from frame {d['recorded_from']}), "
           f"{cfg.substeps} substeps x {cfg.iterations} iterations (both solvers)", flush=True)
-    head = (f"{'solver':>7} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
+    head = (f"{'solver':>8} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
             f"{'max pen v':>9} {'depth mm':>8} {'self-x':>6} {'stretch':>8} {'nan':>4}")
     if args.check_filters:
         check_world_filters(d)
@@ -443,13 +528,20 @@ def main() -> None:
             for name in args.solvers.split(","):
                 if name == "drape":
                     r = run_drape(d, n, self_col, frames, dev, measure)
-                else:
+                    _row(name, n, self_col, r)
+                    continue
+                for launch in args.newton_launch.split(","):
                     r = run_newton(d, n, self_col, frames, dev, measure, substeps=cfg.substeps,
-                                   iterations=cfg.iterations)
-                print(f"{name:>7} {n:5d} {'on' if self_col else 'off':>5} {r['ms_per_frame']:9.1f} "
-                      f"{r['garment_frames_per_s']:10.1f} {r['frames_with_penetration']:>4d}/{r['recorded']:<5d} "
-                      f"{r['max_penetrating_vertices']:9d} {r['max_depth_mm']:8.2f} {r['max_self_intersections']:6d} "
-                      f"{r['max_stretch']:8.3f} {'yes' if r['nan'] else 'no':>4}", flush=True)
+                                   iterations=cfg.iterations, graph=launch == "graph")
+                    _row("newton-g" if launch == "graph" else name, n, self_col, r)
+
+
+def _row(name: str, n: int, self_col: bool, r: dict) -> None:
+    """One line of the table: a solver's time and scene 0's quality at one batch size."""
+    print(f"{name:>8} {n:5d} {'on' if self_col else 'off':>5} {r['ms_per_frame']:9.1f} "
+          f"{r['garment_frames_per_s']:10.1f} {r['frames_with_penetration']:>4d}/{r['recorded']:<5d} "
+          f"{r['max_penetrating_vertices']:9d} {r['max_depth_mm']:8.2f} {r['max_self_intersections']:6d} "
+          f"{r['max_stretch']:8.3f} {'yes' if r['nan'] else 'no':>4}", flush=True)
 
 
 if __name__ == "__main__":

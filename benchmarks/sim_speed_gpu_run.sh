@@ -16,7 +16,9 @@
 #       `drape generate --preset paper-gnn --device cuda` from that cache, stopped at GNN_SECONDS (585);
 #       SET=k=v,k=v: SolverConfig fields for every run; logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
-#   (NEWTON_BATCHES=64: Newton at those batch sizes only; at 256 scenes its own solver set-up takes minutes)
+#   (NEWTON_BATCHES=64: Newton at those batch sizes only; NEWTON_SELF=on: with self-collision only;
+#   NEWTON_LAUNCH=graph: Newton's frames as CUDA graphs only, default python,graph; NEWTON_PROFILE=K: each
+#   solver's top K kernels over one more frame, default 12)
 #   OUT=/tmp/o PHASE=compare BASE=.bench_base SETS="- sweep_groups=1" bash ...   the profile at BATCHES (default
 #       64,256), self-collision on, of an earlier tree (BASE: a copy of its datagen/ and benchmarks/, e.g.
 #       `git archive REF datagen benchmarks | tar x -C .bench_base`; none: left out) and of this one at each
@@ -72,7 +74,8 @@ figures)
   sets=(); opts=(); for kv in ${SET//,/ }; do sets+=(--set "$kv"); opts+=(--drape-option "$kv"); done  # SET: as in compare
   step() { echo "$(date +%T) $1 exit $2" >> "$W/progress"; }
   [ "${NEWTON:-1}" = 1 ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda \
-    --batches ${NEWTON_BATCHES:-64,256} --self ${NEWTON_SELF:-on,off} --frames 40 --check-filters "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
+    --batches ${NEWTON_BATCHES:-64,256} --self ${NEWTON_SELF:-on,off} --frames 40 --check-filters \
+    --newton-launch ${NEWTON_LAUNCH:-python,graph} --profile ${NEWTON_PROFILE:-12} "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
   python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off "${sets[@]}" 2>&1 \
     | filter > "$W/throughput.txt"; step throughput $?
   [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
