@@ -74,6 +74,19 @@ def contact_force_hessian(dx_rel: wp.vec3, n: wp.vec3, depth: float, k: float, m
 
 
 @wp.func
+def body_plane_force_hessian(xi: wp.vec3, point: wp.vec3, n: wp.vec3, r: float, k: float):
+    """Force and Hessian of one body contact plane (through ``point``, normal ``n``) on a vertex at
+    ``xi``: the penalty ``k/2 (r - dist)²`` while the vertex is closer than ``r``, else zero.
+    (Friction with the body is ``body_stick_slip``'s and ``friction_force_hessian``'s.)"""
+    f = wp.vec3(0.0)
+    h = wp.mat33(0.0)
+    dist = wp.dot(xi - point, n)
+    if dist < r:
+        f, h = contact_force_hessian(wp.vec3(0.0), n, r - dist, k, 0.0, 0.0, 1.0)
+    return f, h
+
+
+@wp.func
 def friction_force_hessian(dx_rel: wp.vec3, n: wp.vec3, limit: float, eps_u: float):
     """Coulomb friction of at most ``limit`` [N] against the tangential part of the relative
     displacement ``dx_rel`` over the substep, smoothed (a stiff spring) below ``eps_u``."""

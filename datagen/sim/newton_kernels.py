@@ -35,9 +35,9 @@ from __future__ import annotations
 
 import warp as wp
 
-from datagen.sim.kernels import (bending_force_hessian, buckled_stiffness, contact_force_hessian, friction_force_hessian,
-                                 friction_limit, friction_part, hinge_gradients, lock_force_hessian,
-                                 membrane_force_hessian, stencil_pick, vec5)
+from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, buckled_stiffness,
+                                 friction_force_hessian, friction_limit, friction_part, hinge_gradients,
+                                 lock_force_hessian, membrane_force_hessian, stencil_pick, vec5)
 
 
 @wp.func
@@ -139,12 +139,9 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
     r = body_radius[i]
     for p in range(body_has.shape[1]):
         if body_has[i, p] == 1:
-            n = body_normal[i, p]
-            dist = wp.dot(xi - body_point[i, p], n)
-            if dist < r:
-                fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0)
-                force += fc
-                hess += hc
+            fc, hc = body_plane_force_hessian(xi, body_point[i, p], body_normal[i, p], r, body_k)
+            force += fc
+            hess += hc
     if body_friction != 0:
         best = friction_part(i, body_has, body_normal, body_lambda)
         if best >= 0:

@@ -20,8 +20,8 @@ from __future__ import annotations
 import warp as wp
 
 from datagen.sim.detection_kernels import triangle_closest_bary
-from datagen.sim.kernels import (bending_force_hessian, body_stick_slip, contact_force_hessian, friction_limit,
-                                 friction_part, membrane_force_hessian, vec5)
+from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, body_stick_slip,
+                                 contact_force_hessian, friction_limit, friction_part, membrane_force_hessian, vec5)
 
 WARP_SIZE = 32
 """Threads of a CUDA warp: the lanes of one vertex lie in one warp, and a launch is padded to whole warps
@@ -214,12 +214,9 @@ def solve_colour(
     r = body_radius[i]
     for p in range(lane, parts, lanes):
         if body_has[i, p] == 1:
-            n = body_normal[i, p]
-            dist = wp.dot(xi - body_point[i, p], n)
-            if dist < r:
-                fc, hc = contact_force_hessian(wp.vec3(0.0), n, r - dist, body_k, 0.0, eps_u, 1.0)
-                force += fc
-                hess += hc
+            fc, hc = body_plane_force_hessian(xi, body_point[i, p], body_normal[i, p], r, body_k)
+            force += fc
+            hess += hc
     # the lanes' sums (every thread of the warp takes part)
     force = lane_sum_vec3(force, lanes)
     hess = lane_sum_mat33(hess, lanes)
