@@ -17,7 +17,8 @@
 #       SET=k=v,k=v: SolverConfig fields for every run; logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
 #   (NEWTON_BATCHES=64: Newton at those batch sizes only; NEWTON_SELF=on: with self-collision only;
-#   NEWTON_LAUNCH=graph: Newton's frames as CUDA graphs only, default python,graph; NEWTON_PROFILE=K: each
+#   NEWTON_LAUNCH: how Newton's side is launched (bench_newton.py --newton-launch), default graph, then
+#   Newton alone launched from Python at NEWTON_PY_BATCHES (default 64; none: not); NEWTON_PROFILE=K: each
 #   solver's top K kernels over one more frame, default 12)
 #   OUT=/tmp/o PHASE=compare BASE=.bench_base SETS="- sweep_groups=1" bash ...   the profile at BATCHES (default
 #       64,256), self-collision on, of an earlier tree (BASE: a copy of its datagen/ and benchmarks/, e.g.
@@ -75,7 +76,10 @@ figures)
   step() { echo "$(date +%T) $1 exit $2" >> "$W/progress"; }
   [ "${NEWTON:-1}" = 1 ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda \
     --batches ${NEWTON_BATCHES:-64,256} --self ${NEWTON_SELF:-on,off} --frames 40 --check-filters \
-    --newton-launch ${NEWTON_LAUNCH:-python,graph} --profile ${NEWTON_PROFILE:-12} "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
+    --newton-launch ${NEWTON_LAUNCH:-graph} --profile ${NEWTON_PROFILE:-12} "${opts[@]}" 2>&1 | filter > "$W/newton.txt"; step newton $?; }
+  [ "${NEWTON:-1}" = 1 ] && [ "${NEWTON_PY_BATCHES:-64}" != none ] && { python benchmarks/bench_newton.py --inputs "$NEWTON_RUNS" \
+    --scene tshirt/walk --device cuda --batches ${NEWTON_PY_BATCHES:-64} --self ${NEWTON_SELF:-on,off} --frames 40 \
+    --solvers newton --newton-launch python 2>&1 | filter > "$W/newton_python.txt"; step newton-python $?; }
   python benchmarks/bench_sim.py run --inputs "$SIM_INPUTS" --device cuda --batches ${BATCHES:-1,16,64,256} --self on,off "${sets[@]}" 2>&1 \
     | filter > "$W/throughput.txt"; step throughput $?
   [ "${PROFILE:-}" ] && { python benchmarks/bench_sim.py profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" \
@@ -91,7 +95,7 @@ figures)
 poll)
   W=${W:-/tmp/s25}; t0=$SECONDS
   while [ ! -f "$W/done" ] && [ $((SECONDS - t0)) -lt "${WAIT:-540}" ]; do sleep 5; done
-  cat "$W/progress"; for f in "$W"/newton.txt "$W"/throughput.txt "$W"/profile.txt "$W"/six_runs.txt "$W"/generate_gnn.log; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
+  cat "$W/progress"; for f in "$W"/newton.txt "$W"/newton_python.txt "$W"/throughput.txt "$W"/profile.txt "$W"/six_runs.txt "$W"/generate_gnn.log; do [ -f "$f" ] && { echo "== $f"; grep -v "frame [0-9]*/" "$f" | tail -${TAIL:-40}; }; done
   cp "$W"/*.txt "$W"/*.log "$W"/*.csv "$W/progress" "$OUT/" 2>/dev/null ;;
 *) echo "PHASE must be profile, compare, paper-motion, six, figures or poll" >&2; exit 2 ;;
 esac

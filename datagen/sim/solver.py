@@ -126,10 +126,14 @@ class SolverConfig:
             (the kernels alone clear that state's 20 crossings in four iterations).
         detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
             substep); each detection renews the move bounds from the current positions, so cloth
-            pressed between the body and other cloth can follow a fast body. Every 4 sweeps (five
-            detections a substep) the six long runs end as at every 2 (the same five pass, the same
-            strain to 1-2 points) in 0.76x the time; at 10 sweeps a substep instead of 20 three more
-            fail (H200, ``docs/simulator.md``).
+            pressed between the body and other cloth can follow a fast body. Every 5 sweeps (four
+            detections a substep, the default since the fourth session of 2026-11-28): the six long
+            runs pass with the crossings and strain of every 4 (at most 10 / 25 / 3 / 0 / 4 / 0
+            crossings against 14 / 25 / 4 / 3 / 4 / 0, strain p99 within 0.6 points) and a frame at
+            64 scenes takes 291.9 ms instead of 312.0 (H100, one run). Every 7 (three a substep):
+            273.2 ms, all pass but the dress walk crosses 13 times instead of 4; every 10 (two):
+            255.4 ms, the pants walk tears (308 % stretch at frame 125). Every 4 had ended the six
+            runs as every 2 in 0.76x the time (H200). ``docs/simulator.md``.
         body_friction: Coulomb friction with the body (``kernels.body_stick_slip``); off only to
             diagnose what it does.
         friction_pressure: the largest body contact pressure that friction sees [Pa] (its normal
@@ -203,7 +207,7 @@ class SolverConfig:
     chebyshev_rho: float = 0.7
     chebyshev_contacts: bool = True
     chebyshev_body_contacts: bool = True
-    detection_interval: int = 4
+    detection_interval: int = 5
     body_projection: bool = True
     untangle_step: float = 0.002
     untangle_iterations: int = field(default=4, metadata={"min": 1, "max": 20})
