@@ -518,7 +518,7 @@ def main() -> None:
           f"{len(d['garment'])} vertices, {len(d['faces'])} faces, {d['material']}; body {d['body_vertices']} vertices; "
           f"{frames} frames at 30 fps ({frames - WARM_FRAMES} timed; recorded from frame {d['recorded_from']}), "
           f"{cfg.substeps} substeps x {cfg.iterations} iterations (both solvers)", flush=True)
-    head = (f"{'solver':>8} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
+    head = (f"{'solver':>7} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
             f"{'max pen v':>9} {'depth mm':>8} {'self-x':>6} {'stretch':>8} {'nan':>4}")
     if args.check_filters:
         check_world_filters(d)
@@ -545,7 +545,7 @@ def main() -> None:
 
 def _row(name: str, n: int, self_col: bool, r: dict) -> None:
     """One line of the table: a solver's time and scene 0's quality at one batch size."""
-    print(f"{name:>8} {n:5d} {'on' if self_col else 'off':>5} {r['ms_per_frame']:9.1f} "
+    print(f"{name:>7} {n:5d} {'on' if self_col else 'off':>5} {r['ms_per_frame']:9.1f} "
           f"{r['garment_frames_per_s']:10.1f} {r['frames_with_penetration']:>4d}/{r['recorded']:<5d} "
           f"{r['max_penetrating_vertices']:9d} {r['max_depth_mm']:8.2f} {r['max_self_intersections']:6d} "
           f"{r['max_stretch']:8.3f} {'yes' if r['nan'] else 'no':>4}", flush=True)
