@@ -29,7 +29,7 @@ OUT=${OUT:-/tmp/speed-out}; PHASE=${PHASE:-profile}
 SIM_INPUTS=${SIM_INPUTS:-.simbench/sim_inputs.npz}; NEWTON_RUNS=${NEWTON_RUNS:-.simbench/newton_runs.pkl}
 RUNS=${RUNS:-.simbench/runs.pkl}
 mkdir -p "$OUT"
-filter() { grep --line-buffered -v "^Module\|^Warp\|^   [^ 0-9]\|CUDA Toolkit\|Devices:\|Kernel cache"; }  # keeps table rows (spaces, then digits)
+filter() { grep --line-buffered -v "^Module\|^Warp\|^     \"\|^     /\|CUDA Toolkit\|Devices:\|Kernel cache"; }  # warp's start-up listing
 case "$PHASE" in
 profile)
   for skip in true false; do
