@@ -215,20 +215,42 @@ def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
 
 
 @wp.kernel
-def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
-                     damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3),
-                     out: wp.array2d(dtype=wp.vec3)):
+def membrane_linearise(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
+                       tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
+                       damping: wp.array(dtype=float), h: float, frame: wp.array2d(dtype=wp.vec3),
+                       law: wp.array(dtype=wp.vec4), stress: wp.array(dtype=wp.mat22), scale: wp.array(dtype=float)):
+    """What :func:`membrane_product` needs of each triangle at the step's linearisation point x,
+    computed once a global step instead of once a conjugate-gradient iteration (x does not move
+    while they run): its deformation gradient's columns ``frame[f]``, its stiffnesses ``law[f]``,
+    its PSD-projected stress ``stress[f]`` and its area times 1 + k_d/h ``scale[f]``."""
+    f = wp.tid()
+    D = dm_inv[f]
+    f0, f1 = _membrane_frame(x, faces, D, f)
+    k, S = _membrane_law(f0, f1, tri_stiff[f])
+    frame[f, 0] = f0
+    frame[f, 1] = f1
+    law[f] = k
+    stress[f] = S
+    scale[f] = tri_area[f] * (1.0 + damping[faces[f, 0]] / h)
+
+
+@wp.kernel
+def membrane_product(faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
+                     frame: wp.array2d(dtype=wp.vec3), law: wp.array(dtype=wp.vec4), stress: wp.array(dtype=wp.mat22),
+                     scale: wp.array(dtype=float), p: wp.array(dtype=wp.vec3), out: wp.array2d(dtype=wp.vec3)):
     """Each triangle's share of H_membrane p at its three corners, ``out[f, corner]`` (gathered per
-    vertex by :func:`gather_product`, so no sum depends on thread order)."""
+    vertex by :func:`gather_product`, so no sum depends on thread order), from the triangle's
+    linearisation (:func:`membrane_linearise`)."""
     f = wp.tid()
     i0 = faces[f, 0]
     i1 = faces[f, 1]
     i2 = faces[f, 2]
     D = dm_inv[f]
-    f0, f1 = _membrane_frame(x, faces, D, f)
-    k, S = _membrane_law(f0, f1, tri_stiff[f])
-    A = tri_area[f] * (1.0 + damping[i0] / h)
+    f0 = frame[f, 0]
+    f1 = frame[f, 1]
+    k = law[f]
+    S = stress[f]
+    A = scale[f]
     c0 = _corner_weights(D, 0)
     c1 = _corner_weights(D, 1)
     c2 = _corner_weights(D, 2)
@@ -252,27 +274,43 @@ def membrane_product(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
 
 
 @wp.kernel
-def bending_product(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), bend_k: wp.array(dtype=float),
-                    damping: wp.array(dtype=float), h: float, p: wp.array(dtype=wp.vec3),
-                    out: wp.array2d(dtype=wp.vec3)):
+def bending_linearise(x: wp.array(dtype=wp.vec3), edges: wp.array2d(dtype=wp.int32), bend_k: wp.array(dtype=float),
+                      damping: wp.array(dtype=float), h: float, grad: wp.array2d(dtype=wp.vec3),
+                      scale: wp.array(dtype=float)):
+    """What :func:`bending_product` needs of each hinge at the linearisation point x, once a global
+    step: the angle's gradients at its four stencil vertices ``grad[e]`` and k (1 + k_d/h)
+    ``scale[e]`` (zero for a boundary edge: it has no hinge)."""
+    e = wp.tid()
+    if edges[e, 2] < 0 or edges[e, 3] < 0:
+        for j in range(4):
+            grad[e, j] = wp.vec3(0.0)
+        scale[e] = 0.0
+        return
+    g0, g1, g2, g3 = hinge_gradients(x[edges[e, 0]], x[edges[e, 1]], x[edges[e, 2]], x[edges[e, 3]])
+    grad[e, 0] = g0
+    grad[e, 1] = g1
+    grad[e, 2] = g2
+    grad[e, 3] = g3
+    scale[e] = bend_k[e] * (1.0 + damping[edges[e, 0]] / h)
+
+
+@wp.kernel
+def bending_product(edges: wp.array2d(dtype=wp.int32), grad: wp.array2d(dtype=wp.vec3), scale: wp.array(dtype=float),
+                    p: wp.array(dtype=wp.vec3), out: wp.array2d(dtype=wp.vec3)):
     """Each hinge's share of its Gauss-Newton Hessian k (1 + k_d/h) ∇θ∇θᵀ times p at its four
-    stencil vertices, ``out[e, slot]`` (zero for a boundary edge or a degenerate hinge)."""
+    stencil vertices, ``out[e, slot]`` (zero for a boundary edge or a degenerate hinge), from the
+    hinge's linearisation (:func:`bending_linearise`)."""
     e = wp.tid()
     if edges[e, 2] < 0 or edges[e, 3] < 0:
         for j in range(4):
             out[e, j] = wp.vec3(0.0)
         return
-    i0 = edges[e, 0]
-    i1 = edges[e, 1]
-    i2 = edges[e, 2]
-    i3 = edges[e, 3]
-    x0 = x[i0]
-    x1 = x[i1]
-    x2 = x[i2]
-    x3 = x[i3]
-    g0, g1, g2, g3 = hinge_gradients(x0, x1, x2, x3)
-    s = bend_k[e] * (1.0 + damping[i0] / h) * (wp.dot(g0, p[i0]) + wp.dot(g1, p[i1]) + wp.dot(g2, p[i2])
-                                               + wp.dot(g3, p[i3]))
+    g0 = grad[e, 0]
+    g1 = grad[e, 1]
+    g2 = grad[e, 2]
+    g3 = grad[e, 3]
+    s = scale[e] * (wp.dot(g0, p[edges[e, 0]]) + wp.dot(g1, p[edges[e, 1]]) + wp.dot(g2, p[edges[e, 2]])
+                    + wp.dot(g3, p[edges[e, 3]]))
     out[e, 0] = g0 * s
     out[e, 1] = g1 * s
     out[e, 2] = g2 * s

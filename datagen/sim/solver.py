@@ -327,6 +327,13 @@ class SolverVBD:
                 # each element's share of a product at its corners, gathered per vertex
                 self.cg_face_part = wp.zeros((nf, 3), dtype=wp.vec3)
                 self.cg_edge_part = wp.zeros((ne, 4), dtype=wp.vec3)
+                # each element's linearisation at the global step's x (newton_kernels.*_linearise)
+                self.cg_face_frame = wp.zeros((nf, 2), dtype=wp.vec3)
+                self.cg_face_law = wp.zeros(nf, dtype=wp.vec4)
+                self.cg_face_stress = wp.zeros(nf, dtype=wp.mat22)
+                self.cg_face_scale = wp.zeros(nf, dtype=float)
+                self.cg_hinge_grad = wp.zeros((ne, 4), dtype=wp.vec3)
+                self.cg_hinge_scale = wp.zeros(ne, dtype=float)
                 self.particle_range = wp.array(np.asarray(m.host.particle_range, dtype=np.int32).reshape(-1, 2),
                                                dtype=wp.int32)  # each scene's vertices, for its dot products
             P = m.body_part_count
@@ -631,10 +638,17 @@ class SolverVBD:
 
         wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
         dot(r, z, rz)
+        # x stays put while the iterations run: each element is linearised once, not once an iteration
+        wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
+                                                    self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
+                                                    self.cg_face_scale])
+        wp.launch(N.bending_linearise, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, self.cg_hinge_grad,
+                                                   self.cg_hinge_scale])
         for _ in range(c.global_iterations):
-            wp.launch(N.membrane_product, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
-                                                      p, self.cg_face_part])
-            wp.launch(N.bending_product, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, p, self.cg_edge_part])
+            wp.launch(N.membrane_product, nf, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
+                                                      self.cg_face_stress, self.cg_face_scale, p, self.cg_face_part])
+            wp.launch(N.bending_product, ne, inputs=[m.edges, self.cg_hinge_grad, self.cg_hinge_scale, p,
+                                                     self.cg_edge_part])
             wp.launch(N.gather_product, n, inputs=[self.cg_diag_other, p, m.v2f_offsets, m.v2f, m.v2e_offsets,
                                                    m.v2e, self.cg_face_part, self.cg_edge_part, q])
             dot(p, q, self.cg_pq)
