@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from datagen.sim.detection_kernels import are_neighbours, triangle_closest_bary
+from datagen.sim.detection_kernels import triangle_closest_bary
 
 vec5 = wp.types.vector(length=5, dtype=float)
 """A triangle's membrane law: (k_u, k_v, k_uv, k_s [N/m], buckling ratio r [-])."""

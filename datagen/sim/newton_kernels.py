@@ -37,7 +37,7 @@ import warp as wp
 
 from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, buckled_stiffness,
                                  friction_force_hessian, friction_limit, friction_part, hinge_gradients,
-                                 lock_force_hessian, membrane_force_hessian, stencil_pick, vec5)
+                                 lock_force_hessian, membrane_force_hessian, vec5)
 
 
 @wp.func
@@ -179,23 +179,26 @@ def _membrane_law(f0: wp.vec3, f1: wp.vec3, law: vec5):
 
 
 @wp.kernel
-def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                     tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
-                     edges: wp.array2d(dtype=wp.int32), bend_k: wp.array(dtype=float),
-                     damping: wp.array(dtype=float), h: float,
+def element_diagonal(dm_inv: wp.array(dtype=wp.mat22), frame: wp.array2d(dtype=wp.vec3), law: wp.array(dtype=wp.vec4),
+                     stress: wp.array(dtype=wp.mat22), face_scale: wp.array(dtype=float),
+                     edges: wp.array2d(dtype=wp.int32), grad: wp.array2d(dtype=wp.vec3),
+                     hinge_scale: wp.array(dtype=float),
                      v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
                      v2e_offsets: wp.array(dtype=wp.int32), v2e: wp.array2d(dtype=wp.int32),
                      out_diag: wp.array(dtype=wp.mat33)):
     """Each vertex's 3x3 diagonal block of H_membrane + H_bending (orthotropic StVK Gauss-Newton
     with the PSD-projected geometric part, and the hinges' k ∇θ∇θᵀ, both times 1 + k_d/h), summed
-    over its own faces and hinges in their fixed order."""
+    over its own faces and hinges in their fixed order, from the elements' linearisation
+    (:func:`membrane_linearise`, :func:`bending_linearise`)."""
     i = wp.tid()
     blk_sum = wp.mat33(0.0)
     for n in range(v2f_offsets[i], v2f_offsets[i + 1]):
         f = v2f[n, 0]
         D = dm_inv[f]
-        f0, f1 = _membrane_frame(x, faces, D, f)
-        k, S = _membrane_law(f0, f1, tri_stiff[f])
+        f0 = frame[f, 0]
+        f1 = frame[f, 1]
+        k = law[f]
+        S = stress[f]
         c = _corner_weights(D, v2f[n, 1])
         a = f0 * c[0]
         b = f1 * c[1]
@@ -204,13 +207,12 @@ def element_diagonal(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int3
                + wp.outer(s, s) * k[3])
         geo = c[0] * (S[0, 0] * c[0] + S[0, 1] * c[1]) + c[1] * (S[1, 0] * c[0] + S[1, 1] * c[1])
         blk = blk + wp.identity(n=3, dtype=float) * geo
-        blk_sum += blk * (tri_area[f] * (1.0 + damping[faces[f, 0]] / h))
+        blk_sum += blk * face_scale[f]
     for n in range(v2e_offsets[i], v2e_offsets[i + 1]):
         e = v2e[n, 0]
         if edges[e, 2] >= 0 and edges[e, 3] >= 0:
-            g0, g1, g2, g3 = hinge_gradients(x[edges[e, 0]], x[edges[e, 1]], x[edges[e, 2]], x[edges[e, 3]])
-            g = stencil_pick(g0, g1, g2, g3, v2e[n, 1])
-            blk_sum += wp.outer(g, g) * (bend_k[e] * (1.0 + damping[edges[e, 0]] / h))
+            g = grad[e, v2e[n, 1]]
+            blk_sum += wp.outer(g, g) * hinge_scale[e]
     out_diag[i] = blk_sum
 
 

@@ -625,9 +625,15 @@ class SolverVBD:
             m.friction, m.vertex_area, self.friction_used,
             GLOBAL_FRICTION[c.global_friction] if c.body_friction else 0, c.friction_pressure, self.slip,
             c.body_stiffness, eps_u, h, self.cg_force, self.cg_diag_other])
-        wp.launch(N.element_diagonal, n, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.edges, m.bend_k,
-                                                 m.damping, h, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-                                                 self.cg_diag_el])
+        # x stays put while the iterations run: each element is linearised once, not once an iteration
+        wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
+                                                    self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
+                                                    self.cg_face_scale])
+        wp.launch(N.bending_linearise, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, self.cg_hinge_grad,
+                                                   self.cg_hinge_scale])
+        wp.launch(N.element_diagonal, n, inputs=[m.dm_inv, self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
+                                                 self.cg_face_scale, m.edges, self.cg_hinge_grad, self.cg_hinge_scale,
+                                                 m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e, self.cg_diag_el])
         wp.launch(N.invert_blocks, n, inputs=[self.cg_diag_other, self.cg_diag_el, m.active, self.cg_inverse])
         p, q, r, z = self.cg_p, self.cg_q, self.cg_r, self.cg_z
         rz, rz_new = self.cg_rz, self.cg_rz_new
@@ -638,12 +644,6 @@ class SolverVBD:
 
         wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
         dot(r, z, rz)
-        # x stays put while the iterations run: each element is linearised once, not once an iteration
-        wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
-                                                    self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
-                                                    self.cg_face_scale])
-        wp.launch(N.bending_linearise, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, self.cg_hinge_grad,
-                                                   self.cg_hinge_scale])
         for _ in range(c.global_iterations):
             wp.launch(N.membrane_product, nf, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
                                                       self.cg_face_stress, self.cg_face_scale, p, self.cg_face_part])
