@@ -371,7 +371,7 @@ def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure
     over ``REFIT_STREAMS`` CUDA streams that fork from and join the main stream inside the graph."""
     import warp as wp
 
-    from datagen.sim.solver import REFIT_STREAMS
+    from datagen.sim.solver import REFIT_STREAMS, refit_on_streams
 
     model, solver, pipeline, contacts, meshes, points, vels, start, end, mem = _newton_setup(d, n, self_col, device,
                                                                                            iterations)
@@ -383,27 +383,13 @@ def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure
         raise SystemExit("--newton-launch graph needs a CUDA device")
     streams = [wp.Stream(dev) for _ in range(min(REFIT_STREAMS, n))] if graph else []
 
-    def refit() -> None:
-        if not streams:
-            for m in meshes:
-                m.refit()
-            return
-        main = wp.get_stream(dev)
-        for st in streams:
-            st.wait_stream(main)
-        for k, m in enumerate(meshes):
-            with wp.ScopedStream(streams[k % len(streams)], sync_enter=False):
-                m.refit()
-        for st in streams:
-            main.wait_stream(st)
-
     sub_dt = 1 / 30 / substeps
 
     def frame(a, b):
         for k in range(substeps):
             wp.launch(_lerp_body, n * nb, inputs=[start, end, (k + 1) / substeps, 1.0 / (substeps * sub_dt)],
                       outputs=[points, vels], device=device)
-            refit()
+            refit_on_streams(meshes, streams, dev)
             pipeline.collide(a, contacts)
             solver.step(a, b, control, contacts, sub_dt)
             a, b = b, a

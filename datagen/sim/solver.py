@@ -268,6 +268,26 @@ REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
 
 
+def refit_on_streams(meshes, streams, device) -> None:
+    """Refit warp meshes (or BVHs), spread round ``streams`` that first wait for ``device``'s current
+    stream and that it then waits for in turn (the refits are independent, so a captured CUDA
+    graph runs them side by side); with no streams, one after another on the current stream."""
+    import warp as wp
+
+    if not streams:
+        for mesh in meshes:
+            mesh.refit()
+        return
+    main = wp.get_stream(device)
+    for stream in streams:
+        stream.wait_stream(main)
+    for k, mesh in enumerate(meshes):
+        with wp.ScopedStream(streams[k % len(streams)], sync_enter=False):
+            mesh.refit()
+    for stream in streams:
+        main.wait_stream(stream)
+
+
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
@@ -466,22 +486,7 @@ class SolverVBD:
     def _refit_body(self) -> None:
         """Refit every body mesh to ``body_sub`` (on CUDA spread over streams that wait for the
         current stream's work and that it waits for in turn: the refits are independent)."""
-        import warp as wp
-
-        meshes = self.body_meshes
-        streams = self._refit_streams
-        if not streams:
-            for mesh in meshes:
-                mesh.refit()
-            return
-        main = wp.get_stream(self.model.device)
-        for stream in streams:
-            stream.wait_stream(main)
-        for k, mesh in enumerate(meshes):
-            with wp.ScopedStream(streams[k % len(streams)], sync_enter=False):
-                mesh.refit()
-        for stream in streams:
-            main.wait_stream(stream)
+        refit_on_streams(self.body_meshes, self._refit_streams, self.model.device)
 
     def step(self, state_in, state_out, control, dt: float) -> None:
         """Advance by ``dt`` [s]; ``state_in`` is read, ``state_out`` written (they may be the same).
