@@ -299,6 +299,13 @@ class SolverVBD:
     None, None), read back to the host after the sweep, which syncs the device once per sweep; a
     traced step is launched directly, never from a captured CUDA graph."""
 
+    cg_trace: list[np.ndarray] | None = None
+    """A probe of the global step's convergence, for benchmarks (None in production, and then
+    free): when a list, every global step appends its per-scene rᵀP⁻¹r before the first
+    conjugate-gradient iteration and after each one, [global_iterations + 1, scenes] float64, read
+    back after each iteration (a sync each); a traced step is launched directly, never from a
+    captured CUDA graph."""
+
     def __init__(self, model, config: SolverConfig | None = None):
         import warp as wp
 
@@ -531,8 +538,8 @@ class SolverVBD:
         import warp as wp
 
         dev = wp.get_device(self.model.device)
-        # the sweep probe reads positions back inside the step, which a captured graph cannot do
-        if not (self.config.cuda_graph and dev.is_cuda) or self.sweep_trace is not None:
+        # the probes read arrays back inside the step, which a captured graph cannot do
+        if not (self.config.cuda_graph and dev.is_cuda) or self.sweep_trace is not None or self.cg_trace is not None:
             self._step(state, control, dt)
             return self._needed()
         # a graph bakes in its arrays and constants: one per (state, control, dt, capacity)
@@ -649,6 +656,7 @@ class SolverVBD:
 
         wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
         dot(r, z, rz)
+        trace = [rz.numpy().copy()] if self.cg_trace is not None else None
         for _ in range(c.global_iterations):
             wp.launch(N.membrane_product, nf, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
                                                       self.cg_face_stress, self.cg_face_scale, p, self.cg_face_part])
@@ -661,6 +669,10 @@ class SolverVBD:
             dot(r, z, rz_new)
             wp.launch(N.cg_direction, n, inputs=[z, m.particle_scene, rz, rz_new, p])
             rz, rz_new = rz_new, rz
+            if trace is not None:
+                trace.append(rz.numpy().copy())
+        if trace is not None:
+            self.cg_trace.append(np.stack(trace))
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
 
     def _solve_colour(self, col, x, h: float, out) -> None:
