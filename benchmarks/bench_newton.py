@@ -122,12 +122,12 @@ PROFILE = 0
 """Kernels to print per solver after its timed frames (``--profile``; 0: none)."""
 
 
-def _profile(name: str, fn) -> None:
+def _profile(name: str, fn, device) -> None:
     """One more frame, ``fn``, launched directly under warp's CUDA kernel timers: its top ``PROFILE``
-    kernels by time (warp's builtin ones, such as the BVH and mesh refits, included)."""
+    kernels by time (warp's builtin ones, such as the BVH and mesh refits, included); CUDA only."""
     import warp as wp
 
-    if not PROFILE or not wp.get_device().is_cuda:
+    if not PROFILE or not wp.get_device(device).is_cuda:
         return
     wp.synchronize()
     wp.timing_begin(cuda_filter=wp.TIMING_KERNEL | wp.TIMING_KERNEL_BUILTIN | wp.TIMING_MEMCPY | wp.TIMING_MEMSET)
@@ -177,7 +177,7 @@ def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure)
     def direct():
         solver.config = dataclasses.replace(solver.config, cuda_graph=False)
         solver.step(a, c, ctrl, 1 / 30)
-    _profile(f"drape, {n} scenes, self-collision {'on' if self_col else 'off'}", direct)
+    _profile(f"drape, {n} scenes, self-collision {'on' if self_col else 'off'}", direct, device)
     mets = [measure(p, v, body(f + 1)) for f, (p, v) in enumerate(rec)]
     return {"ms_per_frame": ms, "garment_frames_per_s": 1000 * n / ms, **_summary(mets, d["recorded_from"])}
 
@@ -419,7 +419,7 @@ def run_newton(d, n: int, self_col: bool, frames: int, device, measure: _Measure
         rec.append((s0.particle_q.numpy()[:nv].copy(), s0.particle_qd.numpy()[:nv].copy()))
     ms = 1000 * elapsed / (frames - WARM_FRAMES)
     _profile(f"Newton, {n} worlds, self-contact {'on' if self_col else 'off'}, "
-             f"{'refits on streams' if streams else 'refits one after another'}", lambda: frame(s0, s1))
+             f"{'refits on streams' if streams else 'refits one after another'}", lambda: frame(s0, s1), dev)
     mets = [measure(p, v, body(f + 1)) for f, (p, v) in enumerate(rec)]
     return {"ms_per_frame": ms, "garment_frames_per_s": 1000 * n / ms, "mb_per_scene": mem,
             **_summary(mets, d["recorded_from"])}

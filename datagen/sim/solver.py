@@ -394,6 +394,7 @@ class SolverVBD:
             # on CUDA the meshes' refits (a few short launches each, every substep) go round several
             # streams, so a captured graph runs them side by side instead of one after another
             dev = wp.get_device(m.device)
+            self._on_cuda = dev.is_cuda
             meshes = len(self.body_meshes)
             self._refit_streams = [wp.Stream(dev) for _ in range(min(REFIT_STREAMS, meshes))] if dev.is_cuda else []
             scene_of = h.particle_scene
@@ -682,7 +683,7 @@ class SolverVBD:
         import warp as wp
 
         m, c = self.model, self.config
-        lanes = int(c.sweep_lanes) if wp.get_device(m.device).is_cuda else 1  # a CPU thread walks a vertex alone
+        lanes = int(c.sweep_lanes) if self._on_cuda else 1  # a CPU thread walks a vertex alone
         threads = col.shape[0] * lanes
         if lanes > 1:  # whole warps: every thread of a warp takes part in the lanes' shuffles
             threads = -(-threads // self.S.WARP_SIZE) * self.S.WARP_SIZE
