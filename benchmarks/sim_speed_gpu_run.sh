@@ -14,7 +14,7 @@
 #       not), then the throughput at 1, 16, 64 and 256 scenes, on and off; BATCHES=1,16: other batch sizes;
 #       PROFILE=1,64: the profile at those batch sizes too; SIX=1: the six 300-frame runs; GNN_CACHE=dir:
 #       `drape generate --preset paper-gnn --device cuda` from that cache, stopped at GNN_SECONDS (585);
-#       SET=k=v,k=v: SolverConfig fields for every run; logs in W (default /tmp/s25); then
+#       SET=k=v,k=v: SolverConfig fields for every run (paper-gnn's too: the preset's config with them); logs in W (default /tmp/s25); then
 #   OUT=$OUT PHASE=poll WAIT=540 bash ...   in each later command, until the figures are done
 #   (NEWTON_BATCHES=64: Newton at those batch sizes only; NEWTON_SELF=on: with self-collision only;
 #   NEWTON_LAUNCH: how Newton's side is launched (bench_newton.py --newton-launch), default graph, then
@@ -88,7 +88,17 @@ figures)
     | grep --line-buffered -v "frame [0-9]*/" > "$W/six_runs.txt"; step six $?; }
   if [ "${GNN_CACHE:-}" ]; then  # a DRAPE_CACHE_DIR with paper-gnn's bodies and garments (benchmarks/build_garment_cache.py)
     (nvidia-smi --query-gpu=timestamp,utilization.gpu,memory.used --format=csv -l 10 > "$W/smi_gnn.csv" &)
-    ( time DRAPE_CACHE_DIR="$GNN_CACHE" timeout ${GNN_SECONDS:-585} python -m datagen.cli generate --preset paper-gnn \
+    gnn=(--preset paper-gnn)
+    if [ "${SET:-}" ]; then  # the preset with SET's solver fields: a config file of its own
+      python -m datagen.cli generate --preset paper-gnn --out /tmp/gnn.zarr --print-config | python -c '
+import json, sys
+cfg = json.load(sys.stdin)
+for kv in sys.argv[1].split(","):
+    k, v = kv.split("=", 1)
+    cfg["simulation"]["solver"][k] = json.loads(v) if v[:1] in "0123456789-[{tf" else v
+json.dump(cfg, sys.stdout, indent=1)' "$SET" > "$W/paper_gnn_set.yaml" && gnn=("$W/paper_gnn_set.yaml")
+    fi
+    ( time DRAPE_CACHE_DIR="$GNN_CACHE" timeout ${GNN_SECONDS:-585} python -m datagen.cli generate "${gnn[@]}" \
         --out /tmp/gnn.zarr --device cuda ) > "$W/generate_gnn.log" 2>&1; step paper-gnn $?
   fi
   touch "$W/done" ;;
