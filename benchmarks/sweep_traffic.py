@@ -17,7 +17,9 @@ Nsight Compute's figures are what decides.
 from __future__ import annotations
 
 import argparse
+import sys
 from collections import defaultdict
+from pathlib import Path
 
 import numpy as np
 
@@ -89,9 +91,6 @@ def main() -> None:
                     help="scenes:µs a launch, measured (default: an H200, self-collision off, bench_newton --profile)")
     ap.add_argument("--peak-tbs", type=float, default=4.8, help="the card's memory bandwidth [TB/s] (H200: 4.8)")
     args = ap.parse_args()
-    import sys
-    from pathlib import Path
-
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     from bench_sim import _batch
 
