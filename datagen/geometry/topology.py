@@ -23,12 +23,19 @@ import torch
 __all__ = ["unique_edges", "vertex_face_incidence", "vertex_normals", "vertex_normals_np"]
 
 
-def unique_edges(faces: np.ndarray, *, return_counts: bool = False):
+def unique_edges(faces: np.ndarray, *, return_inverse: bool = False, return_counts: bool = False):
     """The undirected edges of triangles ``faces`` [F, 3], each once: int64 [E, 2] with ``a < b``,
     sorted by (a, b) (the order of ``np.unique(np.sort(e, axis=1), axis=0)``).
 
-    With ``return_counts`` also the number of faces around each edge [E] (1 on a boundary, 2
-    inside a manifold mesh, more where it is non-manifold).
+    Args:
+        faces: triangles [F, 3].
+        return_inverse: also return the edge of every half-edge [3F] (int64), the half-edges in
+            the order ``faces[:, [0, 1]]``, ``faces[:, [1, 2]]``, ``faces[:, [2, 0]]`` concatenated.
+        return_counts: also return the number of faces around each edge [E] (1 on a boundary, 2
+            inside a manifold mesh, more where it is non-manifold).
+
+    Returns:
+        ``edges``, or the tuple ``(edges, inverse?, counts?)`` of those asked for, in that order.
 
     The pairs are keyed as ``a * V + b`` and made unique in one dimension (several times faster
     than ``np.unique(..., axis=0)``, same result).
@@ -37,12 +44,10 @@ def unique_edges(faces: np.ndarray, *, return_counts: bool = False):
     half = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
     lo, hi = half.min(axis=1), half.max(axis=1)
     base = int(hi.max()) + 1 if len(hi) else 1
-    if return_counts:
-        keys, counts = np.unique(lo * base + hi, return_counts=True)
-    else:
-        keys = np.unique(lo * base + hi)
+    keys, *rest = np.unique(lo * base + hi, return_inverse=True, return_counts=True)
     edges = np.stack([keys // base, keys % base], axis=1)
-    return (edges, counts) if return_counts else edges
+    out = (edges,) + ((rest[0].reshape(-1),) if return_inverse else ()) + ((rest[1],) if return_counts else ())
+    return out if len(out) > 1 else edges
 
 
 def vertex_face_incidence(faces: np.ndarray, vertex_count: int, dtype=np.float64) -> sp.csr_matrix:

@@ -12,16 +12,19 @@ from datagen.geometry.topology import unique_edges, vertex_face_incidence, verte
 def _plain_edges(faces):
     f = np.asarray(faces, dtype=np.int64)
     e = np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1)
-    return np.unique(e, axis=0, return_counts=True)
+    return np.unique(e, axis=0, return_inverse=True, return_counts=True)
 
 
 def test_unique_edges_equal_numpys_row_unique_with_counts():
     mesh = trimesh.creation.icosphere(2)
     open_half = mesh.faces[mesh.triangles_center[:, 2] > 0.1]  # a cap: boundary edges have one face
     for faces in (mesh.faces, open_half, np.array([[0, 1, 2], [2, 1, 3], [1, 0, 4], [0, 1, 5]])):
-        ref, ref_counts = _plain_edges(faces)
+        ref, ref_inverse, ref_counts = _plain_edges(faces)
         edges, counts = unique_edges(faces, return_counts=True)
         np.testing.assert_array_equal(edges, ref)
+        np.testing.assert_array_equal(counts, ref_counts)
+        _, inverse, counts = unique_edges(faces, return_inverse=True, return_counts=True)
+        np.testing.assert_array_equal(inverse, ref_inverse.reshape(-1))
         np.testing.assert_array_equal(counts, ref_counts)
         np.testing.assert_array_equal(unique_edges(faces), ref)
         assert edges.dtype == np.int64 and (edges[:, 0] < edges[:, 1]).all()
