@@ -23,9 +23,9 @@ import numpy as np
 import torch
 
 from datagen.geometry.rotations import axis_angle_to_matrix, axis_angle_to_matrix_np
-from datagen.geometry.skinning import blend_skinning, rigid_transforms, rigid_transforms_np
+from datagen.geometry.skinning import blend_skinning, pose_shaped, rigid_transforms, rigid_transforms_np
 
-__all__ = ["blend_skinning", "lbs", "lbs_np", "rigid_transforms", "rigid_transforms_np"]
+__all__ = ["blend_skinning", "lbs", "lbs_np", "pose_shaped", "rigid_transforms", "rigid_transforms_np"]
 
 
 # ----------------------------------------------------------------------------- numpy
@@ -115,17 +115,6 @@ def lbs(
     v_shaped = v_shaped.expand(batch, -1, -1)
     joints = torch.einsum("jv,bvc->bjc", J_regressor, v_shaped)
     rot = axis_angle_to_matrix(pose).expand(batch, -1, -1, -1)
-    if posedirs is not None:
-        eye = torch.eye(3, dtype=rot.dtype, device=rot.device)
-        feature = (rot[:, 1:] - eye).reshape(batch, -1)
-        v_posed = v_shaped + (feature @ posedirs).reshape(batch, -1, 3)
-    else:
-        v_posed = v_shaped
-    posed_joints, rel = rigid_transforms(rot, joints, parents)
-    verts = blend_skinning(v_posed, weights, rel)
-    if transl is not None:
-        transl = transl.reshape(-1, 1, 3)
-        verts = verts + transl
-        posed_joints = posed_joints + transl
+    verts, posed_joints, _ = pose_shaped(rot, joints, parents, shaped=v_shaped, weights=weights, posedirs=posedirs,
+                                         transl=transl)
     return verts, posed_joints
-

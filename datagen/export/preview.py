@@ -34,6 +34,7 @@ from datagen.export.animation import Animation
 from datagen.sim.scene import quiet_warp
 from datagen.export.usd import GARMENT_COLOR, REGION_COLORS
 from datagen.files import atomic_output, check_output_path
+from datagen.geometry.topology import unique_edges
 
 __all__ = ["CLIP_SUFFIXES", "COLOR_BY", "IMAGE_SUFFIXES", "body_distance", "parse_size", "parse_view",
            "render_clip", "render_frame", "vertex_stretch"]
@@ -85,14 +86,9 @@ def parse_size(size: str | tuple[int, int]) -> tuple[int, int]:
 # ------------------------------------------------------------------------------------- quantities
 
 
-def _edges(faces: np.ndarray) -> np.ndarray:
-    f = np.asarray(faces, dtype=np.int64)
-    return np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0)
-
-
 def vertex_stretch(vertices: np.ndarray, faces: np.ndarray, rest: np.ndarray) -> np.ndarray:
     """Per-vertex mean over incident edges of (length / rest length) - 1, [T, V] for [T, V, 3]."""
-    e = _edges(faces)
+    e = unique_edges(faces)
     rest = np.asarray(rest, dtype=np.float64)
     rest_len = np.linalg.norm(rest[e[:, 1]] - rest[e[:, 0]], axis=-1)
     v = np.asarray(vertices, dtype=np.float64)

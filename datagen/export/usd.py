@@ -44,6 +44,7 @@ import numpy as np
 
 from datagen.errors import InputError, require
 from datagen.files import atomic_output, check_output_path
+from datagen.geometry.topology import vertex_normals_np
 
 __all__ = [
     "BODY_COLOR",
@@ -173,38 +174,16 @@ def define_mesh(stage, prim_path: str, faces: np.ndarray, *, color=None, double_
 
 
 def vertex_normals(vertices: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Unit area-weighted vertex normals [T, V, 3] (float32) of ``vertices`` [T, V, 3] (or [V, 3]).
-
-    A vertex in no triangle (or only in degenerate ones) gets a zero normal.
-    """
-    v = np.asarray(vertices, dtype=np.float32)
-    single = v.ndim == 2
-    if single:
-        v = v[None]
-    n = _normals_vt(np.ascontiguousarray(v.transpose(1, 0, 2)), np.asarray(faces, dtype=np.int64))
-    n = n.transpose(1, 0, 2)
-    return np.ascontiguousarray(n[0] if single else n)
+    """Unit area-weighted vertex normals [T, V, 3] (float32, as USD keeps them) of ``vertices``
+    [T, V, 3] (or [V, 3]): :func:`datagen.geometry.topology.vertex_normals_np` in float32. A vertex
+    in no triangle (or only in degenerate ones) gets a zero normal."""
+    return vertex_normals_np(np.asarray(vertices, dtype=np.float32), faces)
 
 
 def _normals_vt(vt: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """:func:`vertex_normals` on vertices laid out [V, T, 3] (face gathers are then contiguous
-    [F, T, 3] blocks and the face-to-vertex sum one sparse product); returns [V, T, 3]."""
-    from scipy.sparse import csr_matrix
-
-    V, T = vt.shape[:2]
-    F = len(faces)
-    a = vt[faces[:, 0]]
-    e1, e2 = vt[faces[:, 1]] - a, vt[faces[:, 2]] - a
-    fn = np.empty_like(a)  # cross product: twice the area times the unit normal
-    fn[..., 0] = e1[..., 1] * e2[..., 2] - e1[..., 2] * e2[..., 1]
-    fn[..., 1] = e1[..., 2] * e2[..., 0] - e1[..., 0] * e2[..., 2]
-    fn[..., 2] = e1[..., 0] * e2[..., 1] - e1[..., 1] * e2[..., 0]
-    incidence = csr_matrix((np.ones(3 * F, np.float32), (faces.reshape(-1), np.repeat(np.arange(F), 3))),
-                           shape=(V, F))
-    n = np.asarray(incidence @ fn.reshape(F, T * 3), dtype=np.float32).reshape(V, T, 3)
-    length = np.sqrt(np.einsum("vtc,vtc->vt", n, n))
-    n /= np.where(length > 0, length, np.inf)[..., None]
-    return n
+    """:func:`vertex_normals` of vertices laid out [V, T, 3] (as the writer keeps a chunk of frames
+    for its bounds), returned [V, T, 3]; no copy is made to change the layout."""
+    return np.moveaxis(vertex_normals_np(np.moveaxis(vt, 0, 1), faces), 0, 1)
 
 
 def joint_paths(parents: Sequence[int], names: Sequence[str]) -> list[str]:

@@ -7,6 +7,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from datagen.geometry.topology import unique_edges
+
 __all__ = ["check_garment", "orientation", "placement", "quality", "self_intersections", "topology"]
 
 
@@ -17,8 +19,7 @@ def topology(vertices: np.ndarray, faces: np.ndarray) -> dict:
     from datagen.garment.mesh import boundary_loops
 
     mesh = trimesh.Trimesh(vertices, faces, process=False)
-    edges = np.sort(mesh.edges, axis=1)
-    _, counts = np.unique(edges, axis=0, return_counts=True)
+    _, counts = unique_edges(faces, return_counts=True)
     non_manifold_edges = int((counts > 2).sum())
     loops = boundary_loops(faces)
     boundary_vertices = sum(len(lp) for lp in loops)
@@ -57,10 +58,6 @@ def self_intersections(vertices: np.ndarray, faces: np.ndarray) -> int:
     return int(ms.current_mesh().selected_face_number())
 
 
-def _edges(f):
-    return np.unique(np.sort(np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]]), axis=1), axis=0)
-
-
 def placement(vertices: np.ndarray, faces: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray) -> dict:
     """Garment vertices inside the body, garment/body triangles crossing, and the minimum clearance (m).
 
@@ -74,7 +71,7 @@ def placement(vertices: np.ndarray, faces: np.ndarray, body_vertices: np.ndarray
     sd = mesh_signed_distance(body, vertices, 10.0)
     crossings = 0
     for (va, fa), mesh in (((vertices, faces), body), ((body_vertices, body_faces), cloth)):
-        e = _edges(np.asarray(fa))
+        e = unique_edges(fa)
         va = np.asarray(va, np.float32)
         crossings += int(segments_hit_mesh(mesh, va[e[:, 0]], va[e[:, 1]]).sum())
     return {"vertices_inside": int((sd < 0).sum()), "edge_crossings": crossings, "min_clearance": float(sd.min())}

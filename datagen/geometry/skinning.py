@@ -1,15 +1,15 @@
 """Forward kinematics and linear blend skinning on arrays (numpy and torch): the skinning
 transforms ``G_j(θ) G_j(θ*)^-1`` of a kinematic tree and their per-vertex blend. The body model
-(:mod:`datagen.body.lbs`) and the derived features of a stored sample
-(:mod:`datagen.geometry.features`) both pose with these, so a body posed for the simulator and
-one rebuilt from a store agree to rounding."""
+(:mod:`datagen.body.lbs`) and the derived features of a stored sample (:mod:`datagen.features`)
+both pose with these (in torch through :func:`pose_shaped`, the one torch SMPL posing), so a body
+posed for the simulator and one rebuilt from a store agree to rounding."""
 
 from __future__ import annotations
 
 import numpy as np
 import torch
 
-__all__ = ["blend_skinning", "rigid_transforms", "rigid_transforms_np"]
+__all__ = ["blend_skinning", "pose_shaped", "rigid_transforms", "rigid_transforms_np"]
 
 
 def rigid_transforms_np(rot: np.ndarray, joints: np.ndarray, parents) -> tuple[np.ndarray, np.ndarray]:
@@ -70,3 +70,54 @@ def rigid_transforms(rot: torch.Tensor, joints: torch.Tensor, parents: list[int]
     rel = torch.cat([world[:, :, :3, :3], (world[:, :, :3, 3] - offset).unsqueeze(-1)], dim=-1)
     rel = torch.cat([rel, world[:, :, 3:, :]], dim=-2)
     return posed_joints, rel
+
+
+def pose_shaped(
+    rot: torch.Tensor,
+    rest_joints: torch.Tensor,
+    parents: list[int],
+    *,
+    shaped: torch.Tensor | None = None,
+    weights: torch.Tensor | None = None,
+    posedirs: torch.Tensor | None = None,
+    transl: torch.Tensor | None = None,
+    parent_index: torch.Tensor | None = None,
+) -> tuple[torch.Tensor | None, torch.Tensor, torch.Tensor]:
+    """SMPL's posing of a shaped body, in torch: the one torch implementation that
+    :func:`datagen.body.lbs.lbs` (so :class:`~datagen.body.model.BodyModelTorch`), the derived
+    features of a store (:mod:`datagen.features`) and the trainers' body layers call.
+
+    ``W(shaped + B_p(θ), J(β), θ, 𝒲) + transl``: forward kinematics of the rest joints, the pose
+    blend shapes (when ``posedirs`` is given) and linear blend skinning of ``shaped``.
+
+    Args:
+        rot: local joint rotations R(θ) [B, J, 3, 3], root first.
+        rest_joints: rest joint positions J(β) [B, J, 3] (m).
+        parents: parent of each joint [J] (-1 for the root).
+        shaped: shaped rest vertices ``T + B_s(β)`` [B, V, 3] (m), or None to pose the joints only.
+            A subset of the body's vertices may be given (with their ``weights``) when ``posedirs``
+            is None.
+        weights: skinning weights [V, J] of ``shaped``'s vertices.
+        posedirs: pose directions [9 (J-1), V*3], or None for no pose blend shapes.
+        transl: root translation [B, 3] (m), added to vertices and joints; None adds nothing.
+        parent_index: ``parents[1:]`` as a long tensor on the device (see
+            :func:`~datagen.geometry.skinning.rigid_transforms`).
+
+    Returns:
+        (vertices [B, V, 3] or None, posed joints [B, J, 3], skinning transforms
+        ``G_j(θ) G_j(θ*)^-1`` [B, J, 4, 4] (without ``transl``)), in metres.
+    """
+    posed_joints, rel = rigid_transforms(rot, rest_joints, parents, parent_index)
+    verts = None
+    if shaped is not None:
+        if posedirs is not None:
+            eye = torch.eye(3, dtype=rot.dtype, device=rot.device)
+            feature = (rot[:, 1:] - eye).reshape(rot.shape[0], -1)
+            shaped = shaped + (feature @ posedirs).reshape(rot.shape[0], -1, 3)
+        verts = blend_skinning(shaped, weights, rel)
+    if transl is not None:
+        transl = transl.reshape(-1, 1, 3)
+        if verts is not None:
+            verts = verts + transl
+        posed_joints = posed_joints + transl
+    return verts, posed_joints, rel

@@ -1,7 +1,9 @@
 """The dataset store: a zarr v3 directory laid out by :mod:`schemas.dataset`.
 
 - :class:`StoreWriter` (``writer``): create or reopen a store, stage samples and static groups
-  crash-safely from any number of processes, then :meth:`~StoreWriter.pack` it in one.
+  crash-safely from any number of processes, then :meth:`~StoreWriter.pack` it in one (``pack``);
+  what is staged is checked against the schema first (``checks``: :func:`check_sample`,
+  :func:`check_static`).
 - :func:`open_store` (``reader``): samples, frames, segments, garment meshes, body and fit models.
 - :func:`validate` (``validation``): every problem of a packed store, as messages.
 - :func:`store_info` / :func:`format_store_info` (``info``): counts, sizes on disk, failures
@@ -21,8 +23,8 @@ import importlib
 _EXPORTS = {
     "DatasetStore": "reader", "open_store": "reader",
     "StorageError": "layout",
-    "SAMPLE_ARRAYS": "writer", "SAMPLE_SCALARS": "writer", "StoreWriter": "writer", "check_sample": "writer",
-    "check_static": "writer",
+    "SAMPLE_ARRAYS": "checks", "SAMPLE_SCALARS": "checks", "StoreWriter": "writer", "check_sample": "checks",
+    "check_static": "checks",
     "validate": "validation",
     "format_store_info": "info", "store_info": "info",
 }

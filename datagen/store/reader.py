@@ -46,7 +46,7 @@ _PATH = {a.name: a.path for a in ARRAYS.values() if a.written_by == "stage_sampl
 _DTYPE = {a.name: np.dtype(a.dtype) for a in ARRAYS.values() if a.written_by == "stage_sample"}
 _QUANTUM = {a.name: a.quantum for a in ARRAYS.values() if a.quantum is not None}
 DERIVED_ARRAYS = tuple(n for n in DERIVED if n not in FRAME_ARRAYS)
-"""Per-frame arrays the reader derives on request (:mod:`datagen.geometry.features`), by name."""
+"""Per-frame arrays the reader derives on request (:mod:`datagen.features`), by name."""
 DERIVED_VERTEX_ARRAYS = tuple(n for n in DERIVED_ARRAYS if n != "body_vertices")
 BINDING_CACHE_SIZE = 256
 """Garment bindings (static data of one garment instance on its body) kept per open store."""
@@ -313,7 +313,7 @@ class DatasetStore:
             names: arrays to read (default: every stored vertex-frame and frame array), stored or
                 derived (:data:`DERIVED_ARRAYS`: ``anchor``, ``anchor_normal``, ``anchor_skin``,
                 ``skin``, ``coarse_normal``, ``joint_distance``, ``body_vertices``), which are
-                computed from the stored ones by :func:`datagen.geometry.features.derive`.
+                computed from the stored ones by :func:`datagen.features.derive`.
 
         Returns:
             name -> [n, V, k] (vertex-frame) or [n, ...] (frame) for the n selected frames, float32
@@ -368,11 +368,11 @@ class DatasetStore:
         read = list(dict.fromkeys([*stored, *sorted(inputs)]))
         data = self._read_stored(i, t0, t1, read, extra)
         for n in _QUANTUM:
-            if n in data:  # steps of quantum from the root joint (datagen.geometry.features.encode_positions)
+            if n in data:  # steps of quantum from the root joint (datagen.geometry.positions.encode_positions)
                 data[n] = decode_positions(data[n], data["joints"][:, 0], _QUANTUM[n])
         if derived:
             if t1 > t0:
-                from datagen.geometry.features import derive  # torch: imported when first needed
+                from datagen.features import derive  # torch: imported when first needed
 
                 data.update(derive(self.binding(int(self.index["garment"][i])), derived, pose=data.get("pose"),
                                    trans=data.get("trans"), coarse=data.get("coarse"), joints=data.get("joints")))
@@ -523,9 +523,9 @@ class DatasetStore:
 
     def binding(self, g: int):
         """What deriving garment instance ``g``'s features needs (its rest mesh, indicator rows of the
-        subdivided body, its body's shape): :func:`datagen.geometry.features.bind_garment`, cached.
-        Trainers call :func:`datagen.geometry.features.derive` with it on their own device."""
-        from datagen.geometry.features import bind_garment, body_shape
+        subdivided body, its body's shape): :func:`datagen.features.bind_garment`, cached.
+        Trainers call :func:`datagen.features.derive` with it on their own device."""
+        from datagen.features import bind_garment, body_shape
 
         if g not in self._bindings:
             garment = self.garment(g)

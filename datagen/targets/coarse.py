@@ -32,6 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from datagen.errors import InputError
+from datagen.geometry.topology import unique_edges
 
 __all__ = ["SmoothingConfig", "coarse_from_detail", "laplacian_operator", "smooth_vertices"]
 
@@ -83,9 +84,7 @@ def laplacian_operator(faces: np.ndarray, vertex_count: int, *, boundary: str = 
     if faces.size and (faces.min() < 0 or faces.max() >= vertex_count):
         raise InputError(f"faces index vertices outside 0..{vertex_count - 1}")
     V = int(vertex_count)
-    half = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    key = np.sort(half, axis=1)
-    edges, counts = np.unique(key, axis=0, return_counts=True)
+    edges, counts = unique_edges(faces, return_counts=True)
     adjacency = _symmetric(edges, V)
     if boundary == "loop":
         border = edges[counts == 1]

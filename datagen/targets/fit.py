@@ -1,7 +1,7 @@
 """The fit attribute α of paper 000 §4.1: factor analysis of garment-body rest distances.
 
 For each garment-body pair in the rest pose, ``d = ||M̄_g - I M̄_b||`` [N_g] is the distance of
-every garment vertex to its indicator body vertex (:func:`~datagen.targets.features.garment_body_distances`).
+every garment vertex to its indicator body vertex (:func:`~datagen.targets.correspondence.garment_body_distances`).
 Garments have different vertex counts, so each ``d`` is cut to a common length N_g* by choosing
 vertices evenly over the garment (:func:`even_subsample`, the paper's rule: reject vertices closer
 than ``r = sqrt(A_g / (C N_g*))``, raising the integer C until N_g* remain). The vectors of the
@@ -91,7 +91,7 @@ class FitPair:
 def fit_pair(garment_rest: np.ndarray, faces: np.ndarray, subdivided_model: BodyModel, betas,
              indicator: np.ndarray | None = None) -> FitPair:
     """The :class:`FitPair` of a garment instance on its body (indicator computed if None)."""
-    from datagen.targets.features import garment_body_distances, garment_indicator
+    from datagen.targets.correspondence import garment_body_distances, garment_indicator
 
     if indicator is None:
         indicator = garment_indicator(garment_rest, subdivided_model, betas)

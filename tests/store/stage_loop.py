@@ -33,6 +33,8 @@ REGION_NAMES = ["front", "back", "sleeve"]
 def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES, body_vertices=BODY_VERTICES
                   ) -> dict[str, tuple[dict, dict]]:
     """group -> (arrays, names) for every static group; garment instance g is made for body g."""
+    from datagen.geometry.topology import unique_edges
+
     rng = np.random.default_rng([SEED, 999])
     B, S, J, G = body_vertices, SHAPES, 24, len(garment_vertices)
     f32 = np.float32
@@ -43,7 +45,7 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
                                 np.int32),
             "faces": rng.integers(0, B, (20, 3)).astype(np.int32)}
     tri = body["faces"]
-    edges = np.unique(np.sort(np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]]), axis=1), axis=0)
+    edges = unique_edges(tri)
     body["subdivision_edges"] = edges.astype(np.int32)
     body["subdivided_faces"] = rng.integers(0, B + len(edges), (80, 3)).astype(np.int32)
     n_bodies = 4

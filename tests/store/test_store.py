@@ -493,9 +493,9 @@ def test_pack_refuses_missing_samples_and_rebuilds_after_interruption(tmp_path, 
     for i in (4, 9):
         writer.stage_sample(i, *sl.sample(i))
     # a pack that dies half way (here: after the first sample table) leaves a store that is not complete
-    import datagen.store.writer as w
+    import datagen.store.pack as w
 
-    real = w._Packer._write
+    real = w.Packer._write
     calls = []
 
     def dying(self, root, spec, shape, blocks):
@@ -504,10 +504,10 @@ def test_pack_refuses_missing_samples_and_rebuilds_after_interruption(tmp_path, 
             raise KeyboardInterrupt
         return real(self, root, spec, shape, blocks)
 
-    monkeypatch.setattr(w._Packer, "_write", dying)
+    monkeypatch.setattr(w.Packer, "_write", dying)
     with pytest.raises(KeyboardInterrupt):
         writer.pack()
-    monkeypatch.setattr(w._Packer, "_write", real)
+    monkeypatch.setattr(w.Packer, "_write", real)
     assert not writer.is_complete and (path / STAGING).is_dir() and (path / "vertex_frames").is_dir()
     with pytest.raises(InputError, match="not complete"):
         open_store(path)
@@ -703,7 +703,8 @@ def test_reading_a_store_loads_the_reader_alone():
             "print(sorted(m for m in sys.modules if m.startswith('datagen') or m in ('fcntl', 'torch')))")
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert "datagen.store.reader" in loaded
-    for heavy in ("datagen.store.writer", "datagen.store.validation", "datagen.store.info", "'fcntl'", "'torch'",
-                  "datagen.geometry.features", "datagen.sim",
+    for heavy in ("datagen.store.writer", "datagen.store.checks", "datagen.store.pack", "datagen.store.validation",
+                  "datagen.store.info", "'fcntl'", "'torch'", "datagen.features", "datagen.geometry.features",
+                  "datagen.sim",
                   "datagen.garment", "datagen.body"):
         assert heavy not in loaded, (heavy, loaded)

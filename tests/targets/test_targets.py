@@ -10,8 +10,8 @@ import pytest
 import trimesh
 
 from datagen.errors import InputError
+from datagen.geometry.topology import vertex_normals_np
 from datagen.targets import (
-    TARGET_NAMES,
     FitAttributeModel,
     FitPair,
     SmoothingConfig,
@@ -22,14 +22,16 @@ from datagen.targets import (
     fit_attribute_model,
     fit_pair,
     garment_correspondence,
-    joint_distances,
     laplacian_operator,
+    skinning_transforms,
+    smooth_vertices,
+)
+from tests.targets.feature_oracle import (
+    TARGET_NAMES,
+    joint_distances,
     pose_body_rows,
     relative_skinning,
     sample_targets,
-    skinning_transforms,
-    smooth_vertices,
-    vertex_normals,
 )
 
 
@@ -154,22 +156,6 @@ def test_indicator_is_the_closest_subdivided_body_vertex(tshirt, subdivided_body
     assert correspondence["body_distance"].min() > 0.005 and correspondence["body_distance"].max() < 0.15
 
 
-def test_vertex_normals_equal_a_plain_loop():
-    mesh = trimesh.creation.icosphere(1)
-    rng = np.random.default_rng(1)
-    v = mesh.vertices[None] * (1 + 0.1 * rng.random((2, len(mesh.vertices), 1)))
-    ours = vertex_normals(v, mesh.faces)
-    for t in range(2):
-        ref = np.zeros_like(v[t])
-        for a, b, c in mesh.faces:
-            n = np.cross(v[t, b] - v[t, a], v[t, c] - v[t, a])
-            for i in (a, b, c):
-                ref[i] += n
-        ref /= np.linalg.norm(ref, axis=1, keepdims=True)
-        np.testing.assert_allclose(ours[t], ref, atol=1e-12)
-    assert (np.einsum("ij,ij->i", ours[0], mesh.vertices) > 0).all()  # outward
-
-
 def test_pose_body_rows_equals_full_posing_with_pose_blend_shapes(small_model):
     poses, trans = _motion(3, seed=5)
     betas = np.random.default_rng(2).normal(size=10)
@@ -210,7 +196,7 @@ def test_anchor_is_the_posed_subdivided_body_at_the_indicator(subdivided_body, b
     ind = correspondence["indicator"]
     full, joints = subdivided_body.pose(betas[None], poses[1:2], trans[1:2])  # the whole 53k-vertex body, once
     np.testing.assert_allclose(out["anchor"][1], full[0, ind], atol=2e-6)
-    np.testing.assert_allclose(out["anchor_normal"][1], vertex_normals(full[0], subdivided_body.faces)[ind], atol=2e-6)
+    np.testing.assert_allclose(out["anchor_normal"][1], vertex_normals_np(full[0], subdivided_body.faces)[ind], atol=2e-6)
     np.testing.assert_allclose(out["joints"][1], joints[0], atol=2e-6)
     # the body normals point out of the body, towards the garment that covers it
     toward = np.einsum("ij,ij->i", out["anchor_normal"][1], out["coarse"][1] - out["anchor"][1])
@@ -399,7 +385,7 @@ def store_body(default_body, subdivided_body):
 
 
 def test_subdivision_recipe_rebuilds_the_subdivided_body(default_body, subdivided_body, store_body, betas):
-    from datagen.geometry.features import body_shape, subdivided_rows
+    from datagen.features import body_shape, subdivided_rows
 
     shape = body_shape(store_body, betas)
     assert shape.subdivided_vertex_count == subdivided_body.vertex_count
@@ -414,7 +400,7 @@ def test_derived_features_equal_the_paper_definitions(tshirt, subdivided_body, d
     """Every array the schema-3 store kept and schema 4 derives, against sample_targets (paper 000 §4)."""
     import torch
 
-    from datagen.geometry.features import bind_garment, body_shape, derive
+    from datagen.features import bind_garment, body_shape, derive
     from datagen.targets import stored_targets
     from schemas.dataset import DERIVED
 
@@ -453,3 +439,37 @@ def test_positions_round_trip_within_the_stated_bound():
     assert steps.dtype == np.int32
     err = np.abs(decode_positions(steps, root, POSITION_QUANTUM).astype(np.float64) - x).max()
     assert POSITION_QUANTUM / 2 * 0.9 < err <= POSITION_QUANTUM / 2 + 4e-7, err
+
+
+def test_node_features_are_the_derived_arrays_side_by_side_for_one_frame_and_a_batch(
+        tshirt, store_body, betas, correspondence, short_sample):
+    """Paper 000's node vectors (R^7 body graph, R^30 garment graph) from the derived arrays, as a
+    dataset builds them, equal the ones rebuilt from a coarse mesh, as a model at inference does;
+    two garments batched as one graph (offset faces, per-vertex joints) give the same rows."""
+    import torch
+
+    from datagen.features import bind_garment, body_shape, coarse_node_features, derive, detail_node_features
+
+    poses, trans, _, out = short_sample
+    binding = bind_garment(body_shape(store_body, betas), tshirt.vertices, tshirt.faces, correspondence["indicator"])
+    t = lambda a: torch.as_tensor(np.asarray(a), dtype=torch.float64)  # noqa: E731
+    d = derive(binding, ["anchor_normal", "anchor_skin", "coarse_normal", "skin", "joint_distance"], pose=t(poses),
+               trans=t(trans), coarse=t(out["coarse"]), joints=t(out["joints"]))
+    alpha = torch.tensor([0.3, -1.0], dtype=torch.float64)
+    V = len(tshirt.vertices)
+    x_coarse = coarse_node_features(d["anchor_normal"][0], d["anchor_skin"][0], alpha)
+    assert x_coarse.shape == (V, 7)
+    torch.testing.assert_close(x_coarse, torch.cat([d["anchor_normal"][0], d["anchor_skin"][0],
+                                                    alpha[:1].expand(V, 1)], dim=1), rtol=0, atol=0)
+    faces = torch.as_tensor(tshirt.faces, dtype=torch.long)
+    coarse, joints = t(out["coarse"]), t(out["joints"])
+    x_detail = detail_node_features(coarse[0], faces, d["skin"][0], joints[0])
+    assert x_detail.shape == (V, 30)
+    torch.testing.assert_close(x_detail, torch.cat([d["coarse_normal"][0], d["skin"][0], d["joint_distance"][0]],
+                                                   dim=1), rtol=0, atol=1e-12)
+    # frames 0 and 1 as one batched graph, as torch_geometric collates them
+    batched = detail_node_features(torch.cat([coarse[0], coarse[1]]), torch.cat([faces, faces + V]),
+                                   torch.cat([d["skin"][0], d["skin"][1]]),
+                                   torch.cat([joints[0].expand(V, -1, -1), joints[1].expand(V, -1, -1)]))
+    torch.testing.assert_close(batched, torch.cat([x_detail, detail_node_features(coarse[1], faces, d["skin"][1],
+                                                                                  joints[1])]), rtol=0, atol=1e-12)
