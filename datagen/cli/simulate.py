@@ -40,7 +40,8 @@ def _cmd_simulate(args) -> int:
     from datagen.body.shapes import resolve_betas
     from datagen.garment.types import make_garment
     from datagen.motion.library import make_motion
-    from datagen.sim.scene import RunConfig, Scene, simulate, warp_device
+    from datagen.sim.device import warp_device
+    from datagen.sim.scene import RunConfig, Scene, simulate
     from datagen.sim.solver import SolverConfig
 
     out = Path(args.out)
