@@ -291,22 +291,10 @@ def refit_on_streams(meshes, streams, device) -> None:
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
-    sweep_trace: list[tuple] | None = None
-    """A convergence probe for benchmarks (None in production, and then free; set it on an instance,
-    or on the class for solvers built inside :func:`~datagen.sim.scene.simulate`): when a list, every
-    sweep appends (substep, sweep, every vertex's move in that sweep [n] in m, and on a substep's
-    last sweep which vertices touch the body and which have cloth-cloth contacts [n] bool, else
-    None, None), read back to the host after the sweep, which syncs the device once per sweep; a
-    traced step is launched directly, never from a captured CUDA graph."""
-
-    cg_trace: list[np.ndarray] | None = None
-    """A probe of the global step's convergence, for benchmarks (None in production, and then
-    free): when a list, every global step appends its per-scene rᵀP⁻¹r before the first
-    conjugate-gradient iteration and after each one, [global_iterations + 1, scenes] float64, read
-    back after each iteration (a sync each); a traced step is launched directly, never from a
-    captured CUDA graph."""
-
-    def __init__(self, model, config: SolverConfig | None = None):
+    def __init__(self, model, config: SolverConfig | None = None, *, probes: tuple = ()):
+        """``probes``: :class:`~datagen.sim.probes.SolverProbe` objects the solver calls at the points
+        that protocol lists (none in production; with any, a step is launched directly, never
+        from a captured CUDA graph); the attribute ``probes`` may be set later too."""
         import warp as wp
 
         from datagen.sim import detection_kernels as D
@@ -317,6 +305,7 @@ class SolverVBD:
 
         self.model = model
         self.config = config or SolverConfig()
+        self.probes = tuple(probes)
         self.K, self.D, self.PK, self.S = K, D, PK, S
         capped = REGISTER_CAPS[self.config.register_caps]
         # the kernels launched below, each its register-capped copy where the config asks for it
@@ -540,7 +529,7 @@ class SolverVBD:
 
         dev = wp.get_device(self.model.device)
         # the probes read arrays back inside the step, which a captured graph cannot do
-        if not (self.config.cuda_graph and dev.is_cuda) or self.sweep_trace is not None or self.cg_trace is not None:
+        if not (self.config.cuda_graph and dev.is_cuda) or self.probes:
             self._step(state, control, dt)
             return self._needed()
         # a graph bakes in its arrays and constants: one per (state, control, dt, capacity)
@@ -657,8 +646,10 @@ class SolverVBD:
 
         wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
         dot(r, z, rz)
-        trace = [rz.numpy().copy()] if self.cg_trace is not None else None
-        for _ in range(c.global_iterations):
+        probes = self.probes
+        for probe in probes:
+            probe.global_residual(self, 0, rz, c.global_iterations == 0)
+        for it in range(c.global_iterations):
             wp.launch(N.membrane_product, nf, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
                                                       self.cg_face_stress, self.cg_face_scale, p, self.cg_face_part])
             wp.launch(N.bending_product, ne, inputs=[m.edges, self.cg_hinge_grad, self.cg_hinge_scale, p,
@@ -670,10 +661,8 @@ class SolverVBD:
             dot(r, z, rz_new)
             wp.launch(N.cg_direction, n, inputs=[z, m.particle_scene, rz, rz_new, p])
             rz, rz_new = rz_new, rz
-            if trace is not None:
-                trace.append(rz.numpy().copy())
-        if trace is not None:
-            self.cg_trace.append(np.stack(trace))
+            for probe in probes:
+                probe.global_residual(self, it + 1, rz, it + 1 == c.global_iterations)
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
 
     def _solve_colour(self, col, x, h: float, out) -> None:
@@ -747,9 +736,10 @@ class SolverVBD:
                 wp.copy(self.x_nm1, x)
                 omega, cheb = 1.0, 0
                 rho = c.chebyshev_rho
+                probes = self.probes
                 for it in range(c.iterations):
-                    if self.sweep_trace is not None:
-                        before = x.numpy().copy()
+                    for probe in probes:
+                        probe.before_sweep(self, s, it, x)
                     if c.self_collision and c.detection_interval and it and it % c.detection_interval == 0:
                         wp.copy(self.x_det, x)
                         self._detect_self()
@@ -767,11 +757,8 @@ class SolverVBD:
                     wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
                                                       omega, self.vt_count, int(not c.chebyshev_contacts),
                                                       self.body_has, int(not c.chebyshev_body_contacts)])
-                    if self.sweep_trace is not None:
-                        last = it == c.iterations - 1
-                        self.sweep_trace.append((s, it, np.linalg.norm(x.numpy() - before, axis=1),
-                                                 (self.body_has.numpy() > 0).any(1) if last else None,
-                                                 self.vt_count.numpy() > 0 if last else None))
+                    for probe in probes:
+                        probe.after_sweep(self, s, it, x, it == c.iterations - 1)
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
                                                            self.body_radius, c.body_stiffness, self.body_lambda])
                 if c.global_iterations and c.global_friction == "lagged":
