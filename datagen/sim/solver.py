@@ -424,21 +424,57 @@ class SolverVBD:
             self.untangle_push = wp.zeros((n, 3), dtype=wp.int32)  # untangle_kernels.PUSH_SCALE units
             self.untangle_hits = wp.zeros(n, dtype=wp.int32)  # crossings each vertex is part of
             self.untangle_edges = wp.zeros(ne, dtype=wp.int32)  # edges that crossed at the first iteration
+        self._build_groups()
         self._allocate_contacts(self.config.contact_capacity)
         self.contact_growths = 0
         self._graphs: dict[tuple, tuple] = {}
         """Captured CUDA graphs of a step, by (id(state), id(control), dt, capacity): (graph, state,
         control), the two kept alive because the graph reads their arrays (at most 9 kept)."""
 
+    def _build_groups(self) -> None:
+        """The per-vertex kernels' argument groups (:mod:`datagen.sim.kernel_groups`) over the model's
+        and the solver's arrays, made once: the cloth-cloth lists' group is remade when they grow
+        (:meth:`_allocate_contacts`), the substep's values are set once a step (:meth:`_step`)."""
+        from datagen.sim import kernel_groups as G
+
+        m, c = self.model, self.config
+        self.verts = G.Vertices()
+        self.verts.mass, self.verts.active, self.verts.damping = m.mass, m.active, m.damping
+        self.verts.friction, self.verts.area = m.friction, m.vertex_area
+        self.membrane = G.Membrane()
+        self.membrane.faces, self.membrane.dm_inv, self.membrane.area = m.faces, m.dm_inv, m.tri_area
+        self.membrane.stiffness, self.membrane.lock = m.tri_stiff, m.tri_lock
+        self.membrane.v2f_offsets, self.membrane.v2f = m.v2f_offsets, m.v2f
+        self.bending = G.Bending()
+        self.bending.edges, self.bending.rest_angle, self.bending.stiffness = m.edges, m.rest_angle, m.bend_k
+        self.bending.v2e_offsets, self.bending.v2e = m.v2e_offsets, m.v2e
+        self.body = G.BodyContact()
+        self.body.has, self.body.point, self.body.normal = self.body_has, self.body_point, self.body_normal
+        self.body.disp, self.body.radius, self.body.lam = self.body_disp, self.body_radius, self.body_lambda
+        self.body.stiffness = c.body_stiffness
+        self.body.friction = int(c.body_friction)
+        self.body.global_friction = GLOBAL_FRICTION[c.global_friction] if c.body_friction else 0
+        self.body.friction_pressure = c.friction_pressure
+        self.body.friction_used = self.friction_used
+        self.substep = G.Substep()
+        self.substep.x_prev, self.substep.x_det, self.substep.inertia_target = self.x_prev, self.x_det, self.y
+        self.substep.bound, self.substep.slip = self.bound, self.slip
+
     def _allocate_contacts(self, cap: int) -> None:
         import warp as wp
 
-        m = self.model
+        from datagen.sim.kernel_groups import SelfContact
+
+        m, c = self.model, self.config
         with wp.ScopedDevice(m.device):
             self.capacity = int(cap)
             self.vt_tri = wp.zeros((m.particle_count, cap), dtype=wp.int32)
             self.tv_vert = wp.zeros((m.face_count, cap), dtype=wp.int32)
             self.ee_edge = wp.zeros((m.edge_count, cap), dtype=wp.int32)
+        g = self.self_contact = SelfContact()
+        g.vt_count, g.vt_tri, g.tv_count, g.tv_vert = self.vt_count, self.vt_tri, self.tv_count, self.tv_vert
+        g.ee_count, g.ee_edge = self.ee_count, self.ee_edge
+        g.radius, g.stiffness, g.friction = c.self_radius, c.self_stiffness, c.self_friction
 
     def freeze(self, state, scene: int) -> None:
         """Stop simulating scene ``scene`` (one that failed): from the next step its vertices are
@@ -619,14 +655,8 @@ class SolverVBD:
 
         m, c = self.model, self.config
         n, nf, ne = m.particle_count, m.face_count, m.edge_count
-        eps_u = c.friction_velocity * h
-        wp.launch(N.vertex_force_diagonal, n, inputs=[
-            x, self.x_prev, self.y, m.mass, m.active, m.damping, m.faces, m.dm_inv, m.tri_area, m.tri_stiff,
-            m.tri_lock, m.edges, m.rest_angle, m.bend_k, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-            self.body_has, self.body_point, self.body_normal, self.body_radius, self.body_disp, self.body_lambda,
-            m.friction, m.vertex_area, self.friction_used,
-            GLOBAL_FRICTION[c.global_friction] if c.body_friction else 0, c.friction_pressure, self.slip,
-            c.body_stiffness, eps_u, h, self.cg_force, self.cg_diag_other])
+        wp.launch(N.vertex_force_diagonal, n, inputs=[x, self.verts, self.membrane, self.bending, self.body,
+                                                      self.substep, self.cg_force, self.cg_diag_other])
         # x stays put while the iterations run: each element is linearised once, not once an iteration
         wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
                                                     self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
@@ -665,7 +695,7 @@ class SolverVBD:
                 probe.global_residual(self, it + 1, rz, it + 1 == c.global_iterations)
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
 
-    def _solve_colour(self, col, x, h: float, out) -> None:
+    def _solve_colour(self, col, x, out) -> None:
         """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``),
         ``sweep_lanes`` threads of a warp per vertex on a GPU, one on a CPU
         (:mod:`datagen.sim.sweep_kernels`)."""
@@ -677,14 +707,7 @@ class SolverVBD:
         if lanes > 1:  # whole warps: every thread of a warp takes part in the lanes' shuffles
             threads = -(-threads // self.S.WARP_SIZE) * self.S.WARP_SIZE
         wp.launch(self.S.solve_colour, threads, device=m.device, inputs=[
-            col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
-            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
-            m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-            self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
-            self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
-            self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
-            c.friction_velocity * h, h, m.vertex_area, int(c.body_friction), c.friction_pressure,
-            self.friction_used, lanes, out])
+            col, x, self.verts, self.membrane, self.bending, self.body, self.self_contact, self.substep, lanes, out])
 
     def _step(self, state, control, dt: float) -> None:
         import warp as wp
@@ -692,6 +715,7 @@ class SolverVBD:
         K, m, c = self.K, self.model, self.config
         n, nb = m.particle_count, m.body_vertex_count
         h = dt / c.substeps
+        self.substep.h, self.substep.eps_u = h, c.friction_velocity * h
         x, v = state.positions, state.velocities
         self.needed.zero_()
         self.projected.zero_()
@@ -746,7 +770,7 @@ class SolverVBD:
                         wp.copy(self.x_nm1, x)
                         omega, cheb = 1.0, 0
                     for col in self.colours:
-                        self._solve_colour(col, x, h, self.x_tmp)
+                        self._solve_colour(col, x, self.x_tmp)
                         wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
                     omega = 1.0 if cheb < 1 else (2.0 / (2.0 - rho * rho) if cheb == 1 else 4.0 / (4.0 - rho * rho * omega))
                     cheb += 1
