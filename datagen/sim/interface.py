@@ -2,7 +2,7 @@
 known by name (:data:`SOLVERS`), one of which :class:`~datagen.sim.scene.RunConfig` selects.
 
 A new solver is a class that satisfies :class:`ClothSolver` (built from a finalised
-:class:`~datagen.sim.model.ClothModel` and a :class:`~datagen.sim.solver.SolverConfig`) plus one
+:class:`~datagen.sim.model.ClothModel` and a :class:`~datagen.sim.settings.SolverConfig`) plus one
 entry in :data:`SOLVERS`.
 """
 
@@ -11,7 +11,8 @@ from __future__ import annotations
 from typing import Protocol, runtime_checkable
 
 from datagen.errors import InputError
-from datagen.sim.solver import SolverConfig, SolverVBD
+from datagen.sim.settings import SolverConfig
+from datagen.sim.solver import SolverVBD
 
 
 @runtime_checkable

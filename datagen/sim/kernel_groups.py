@@ -66,7 +66,7 @@ class BodyContact:
     lam: wp.array2d(dtype=float)  # [n, P] the lagged normal forces [N]
     stiffness: float  # k_c [N/m]
     friction: int  # the sweeps' friction: 1 on, 0 off
-    global_friction: int  # the global step's: solver.GLOBAL_FRICTION's code (0 off, 1 stiff, 2 lagged)
+    global_friction: int  # the global step's: settings.GLOBAL_FRICTION's code (0 off, 1 stiff, 2 lagged)
     friction_pressure: float  # the largest pressure friction sees [Pa]
     friction_used: wp.array(dtype=float)  # [n] friction force the inertial prediction already used [N]
 

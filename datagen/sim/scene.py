@@ -35,7 +35,7 @@ from datagen.sim.device import MEMORY_ADVICE, check_device_memory, torch_cuda, w
 from datagen.sim.interface import SOLVERS, make_solver, solver_class
 from datagen.sim.metrics import METRIC_NAMES, Failure, FailureThresholds, Metrics
 from datagen.sim.model import ClothModelBuilder
-from datagen.sim.solver import SolverConfig
+from datagen.sim.settings import SolverConfig
 from datagen.sim.state import BodyControl, ClothState
 
 log = logging.getLogger(__name__)

@@ -128,7 +128,7 @@ def test_finished_store_is_left_alone_and_other_config_refused(local_store):
     assert generate(micro(simulation={**MICRO["simulation"], "batch_size": 1}), local_store)["simulated"] == 0
     attrs = read_root_attributes(local_store)
     assert attrs["code_version"] == code_version() and len(code_version()) == 16
-    assert "batch_size" not in attrs["config"]["simulation"] and attrs["config"]["simulation"]["solver"]["substeps"] == 3
+    assert "batch_size" not in attrs["config"]["simulation"] and attrs["config"]["simulation"]["solver"]["steps"]["substeps"] == 3
     with pytest.raises(InputError, match="frames"):
         generate(micro(frames=7), local_store)
     after = {p: p.stat().st_mtime_ns for p in local_store.rglob("*") if p.is_file()}
