@@ -37,21 +37,21 @@ class Membrane:
     faces: wp.array2d(dtype=wp.int32)  # [F, 3]
     dm_inv: wp.array(dtype=wp.mat22)  # [F] inverse rest shape matrices (weft, warp)
     area: wp.array(dtype=float)  # [F] rest area [m²]
-    stiffness: wp.array(dtype=vec5)  # [F] the law's stiffnesses (kernels.membrane_force_hessian) [N/m]
-    lock: wp.array(dtype=wp.vec2)  # [F] the strain lock (threshold, stiffness)
+    stiffness: wp.array(dtype=vec5)  # [F] (k_u, k_v, k_uv, k_s [N/m], buckling ratio r)
+    lock: wp.array(dtype=wp.vec2)  # [F] (1 + lock strain, lock stiffness [N/m])
     v2f_offsets: wp.array(dtype=wp.int32)  # [n + 1] each vertex's range in v2f
-    v2f: wp.array2d(dtype=wp.int32)  # [sum, 2] (face, the vertex's corner in it)
+    v2f: wp.array2d(dtype=wp.int32)  # [3F, 2] (face, corner) grouped by vertex
 
 
 @wp.struct
 class Bending:
     """The hinges' bending and the vertex-to-edge adjacency."""
 
-    edges: wp.array2d(dtype=wp.int32)  # [E, 4] the edge's two vertices and the two wing vertices (-1: none)
-    rest_angle: wp.array(dtype=float)  # [E] rad
-    stiffness: wp.array(dtype=float)  # [E] [N m]
+    edges: wp.array2d(dtype=wp.int32)  # [E, 4] the edge (0, 1) and the opposite corners (2, 3; -1 on a boundary)
+    rest_angle: wp.array(dtype=float)  # [E] rest dihedral angle [rad]
+    stiffness: wp.array(dtype=float)  # [E] hinge stiffness [N·m] (0 on a boundary edge)
     v2e_offsets: wp.array(dtype=wp.int32)  # [n + 1] each vertex's range in v2e
-    v2e: wp.array2d(dtype=wp.int32)  # [sum, 2] (edge, the vertex's place in its stencil 0..3)
+    v2e: wp.array2d(dtype=wp.int32)  # [*, 2] (edge, stencil slot 0..3) grouped by vertex
 
 
 @wp.struct

@@ -25,22 +25,24 @@ REGISTER_CAPS = {"none": (), "detection": ("detect_vertex_triangle", "detect_edg
 """``LaunchConfig.register_caps`` values and the kernels each runs as their register-capped copies."""
 
 
-def _limit(default, unit: str = "", **limits):
-    """A field with ``default`` and its limits and unit in the metadata (what :func:`check_limits` reads)."""
-    return field(default=default, metadata={"unit": unit, **limits})
+def _limit(default, unit: str = "", why: str = "", **limits):
+    """A field with ``default`` and its limits, unit and the reason for them (``why``) in the metadata
+    (what :func:`check_limits` reads)."""
+    return field(default=default, metadata={"unit": unit, "why": why, **limits})
 
 
 def check_limits(config) -> None:
     """Check every field of the dataclass ``config`` against its metadata's limits (``min``, ``max``,
     ``above``, ``below``, ``choices``); an :class:`InputError` names the field, its value and what
-    is allowed. Fields without limits pass."""
+    is allowed (and why, where the metadata's ``why`` says). Fields without limits pass."""
     for f in dataclasses.fields(config):
         meta, value = f.metadata, getattr(config, f.name)
         unit = f" [{meta['unit']}]" if meta.get("unit") else ""
         where = f"{type(config).__name__}.{f.name} = {value!r}"
+        why = f": {meta['why']}" if meta.get("why") else ""
         if "choices" in meta:
             if value not in meta["choices"]:
-                raise InputError(f"{where} is not allowed; choose one of {', '.join(map(repr, meta['choices']))}")
+                raise InputError(f"{where} is not allowed; choose one of {', '.join(map(repr, meta['choices']))}{why}")
             continue
         if not any(k in meta for k in ("min", "max", "above", "below")):
             continue
@@ -50,7 +52,7 @@ def check_limits(config) -> None:
         hi = (f" <= {meta['max']:g}" if "max" in meta else f" < {meta['below']:g}" if "below" in meta else "")
         if ("min" in meta and value < meta["min"] or "above" in meta and value <= meta["above"]
                 or "max" in meta and value > meta["max"] or "below" in meta and value >= meta["below"]):
-            raise InputError(f"{where} is out of range; allowed: {lo}{f.name}{hi}{unit}")
+            raise InputError(f"{where} is out of range; allowed: {lo}{f.name}{hi}{unit}{why}")
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -140,7 +142,8 @@ class ProjectionConfig:
     enabled: bool = True
     skip: bool = True
     reach: float = _limit(0.1, "m", min=0.0)
-    accuracy: float = _limit(1.25, min=1.0)
+    accuracy: float = _limit(1.25, min=1.0, why="below 1 warp's winding number counts a body part as its dipole "
+                             "from inside its bounding sphere, and its inside-or-out answer breaks")
 
     def __post_init__(self):
         check_limits(self)
@@ -184,7 +187,8 @@ class SelfContactConfig:
     friction: float = _limit(0.2, min=0.0)
     query: float = _limit(0.01, "m", above=0.0)
     bound_floor: float = _limit(0.006, "m", above=0.0)
-    bound_fraction: float = _limit(0.45, above=0.0, below=0.5)
+    bound_fraction: float = _limit(0.45, above=0.0, below=0.5, why="at 0.5 or more two cloth primitives moving "
+                                   "towards each other could meet between detections")
     capacity: int = _limit(16, min=1)
     detection_interval: int = _limit(5, min=0)
     untangle_step: float = _limit(0.002, "m", min=0.0)
@@ -221,7 +225,8 @@ class LaunchConfig:
 
     cuda_graph: bool = True
     register_caps: str = field(default="detection", metadata={"choices": tuple(REGISTER_CAPS)})
-    sweep_lanes: int = field(default=4, metadata={"choices": (1, 2, 4, 8, 16, 32)})
+    sweep_lanes: int = field(default=4, metadata={"choices": (1, 2, 4, 8, 16, 32),
+                                                  "why": "a power of two up to a warp's 32 threads"})
     coherent_order: bool = True
 
     def __post_init__(self):

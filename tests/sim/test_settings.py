@@ -37,9 +37,11 @@ def test_every_limited_field_is_refused_outside_its_range_with_its_name_value_an
                 assert "allowed" in msg or "choose one of" in msg, msg
                 tried += 1
     assert tried >= 25
-    with pytest.raises(InputError, match=r"SelfContactConfig.radius = -0.001 is out of range; allowed: 0 < radius \[m\]"):
+    with pytest.raises(InputError,
+                       match=r"SelfContactConfig.radius = -0.001 is out of range; allowed: 0 < radius \[m\]"):
         SelfContactConfig(radius=-0.001)
-    with pytest.raises(InputError, match=r"StepConfig.chebyshev_rho = 1.0 is out of range; allowed: 0 <= chebyshev_rho < 1"):
+    with pytest.raises(InputError,
+                       match=r"StepConfig.chebyshev_rho = 1.0 is out of range; allowed: 0 <= chebyshev_rho < 1"):
         StepConfig(chebyshev_rho=1.0)
 
 
