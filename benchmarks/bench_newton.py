@@ -156,7 +156,7 @@ def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure)
         b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s, material_frames=d["frames"])
         b.add_body(body(0), d["body_faces"], scene=s, face_part=d["body_face_part"])
     m = b.finalize(str(device))
-    solver = SolverVBD(m, SolverConfig(**{**DRAPE_OPTIONS, "self_collision": self_col}))
+    solver = SolverVBD(m, SolverConfig(**{**DRAPE_OPTIONS, "self_contact.enabled": self_col}))
     a, c = ClothState.from_model(m), ClothState.from_model(m)
     ctrl = BodyControl.from_numpy(m, np.tile(body(0), (n, 1)))
     solver.reset_body(ctrl)
@@ -295,7 +295,7 @@ def _newton_setup(d, n: int, self_col: bool, device, iterations: int, replicate:
     world.add_cloth_mesh(pos=wp.vec3(0.0, 0.0, 0.0), rot=wp.quat_identity(), scale=1.0, vel=wp.vec3(0.0, 0.0, 0.0),
                          vertices=d["garment"].astype(np.float32).tolist(), indices=d["faces"].reshape(-1).tolist(),
                          density=mat.density, tri_ke=mu, tri_ka=lam, tri_kd=mat.damping, edge_ke=mat.bending,
-                         edge_kd=mat.damping, particle_radius=mat.thickness + cfg.body_margin)
+                         edge_kd=mat.damping, particle_radius=mat.thickness + cfg.body.margin)
     shape_cfg = newton.ModelBuilder.ShapeConfig(mu=mat.friction, has_shape_collision=False)
     world.add_shape_mesh(body=-1, mesh=newton.Mesh(body0, body_faces.reshape(-1)), cfg=shape_cfg)
     world.color()
@@ -305,10 +305,10 @@ def _newton_setup(d, n: int, self_col: bool, device, iterations: int, replicate:
     dev = wp.get_device(device)
     mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
     model = scene.finalize(device=device)
-    model.soft_contact_ke = cfg.body_stiffness
+    model.soft_contact_ke = cfg.body.stiffness
     model.soft_contact_kd = 0.0
     model.soft_contact_mu = mat.friction
-    model.particle_mu = cfg.self_friction
+    model.particle_mu = cfg.self_contact.friction
 
     # the body: one points array for every world's body mesh (slices), lerped per substep
     with wp.ScopedDevice(device):
@@ -333,13 +333,13 @@ def _newton_setup(d, n: int, self_col: bool, device, iterations: int, replicate:
         radius[body_shapes] = 20.0
         model.shape_collision_radius.assign(radius)
 
-        pipeline = newton.CollisionPipeline(model, soft_contact_gap=cfg.body_query)
+        pipeline = newton.CollisionPipeline(model, soft_contact_gap=cfg.body.query)
         contacts = pipeline.contacts()
         with _WorldFilters(n if replicate else 0, len(d["garment"]), len(d["faces"]), model.edge_count // n):
             solver = newton.solvers.SolverVBD(
                 model, iterations=iterations, particle_enable_self_contact=self_col,
-                particle_self_contact_margin=cfg.self_radius,
-                particle_self_contact_gap=cfg.self_query - cfg.self_radius)
+                particle_self_contact_margin=cfg.self_contact.radius,
+                particle_self_contact_gap=cfg.self_contact.query - cfg.self_contact.radius)
     mem = (wp.get_mempool_used_mem_current(dev) - mem0) / n / 2**20 if dev.is_cuda else float("nan")
 
     return model, solver, pipeline, contacts, meshes, points, vels, start, end, mem
@@ -503,7 +503,7 @@ def main() -> None:
     print(f"device {dev} ({dev.name}); warp {wp.__version__}; newton {newton_version}; scene {args.scene}: "
           f"{len(d['garment'])} vertices, {len(d['faces'])} faces, {d['material']}; body {d['body_vertices']} vertices; "
           f"{frames} frames at 30 fps ({frames - WARM_FRAMES} timed; recorded from frame {d['recorded_from']}), "
-          f"{cfg.substeps} substeps x {cfg.iterations} iterations (both solvers)", flush=True)
+          f"{cfg.steps.substeps} substeps x {cfg.steps.iterations} iterations (both solvers)", flush=True)
     head = (f"{'solver':>7} {'batch':>5} {'self':>5} {'ms/frame':>9} {'g-frames/s':>10} {'pen frames':>10} "
             f"{'max pen v':>9} {'depth mm':>8} {'self-x':>6} {'stretch':>8} {'nan':>4}")
     if args.check_filters:
@@ -518,8 +518,8 @@ def main() -> None:
                     continue
                 for launch in args.newton_launch.split(","):
                     try:
-                        r = run_newton(d, n, self_col, frames, dev, measure, substeps=cfg.substeps,
-                                       iterations=cfg.iterations, graph=launch == "graph")
+                        r = run_newton(d, n, self_col, frames, dev, measure, substeps=cfg.steps.substeps,
+                                       iterations=cfg.steps.iterations, graph=launch == "graph")
                     except Exception as exc:  # a capture Newton refuses: say so, and go on with the other rows
                         if launch != "graph":
                             raise

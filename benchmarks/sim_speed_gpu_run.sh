@@ -92,10 +92,15 @@ figures)
     if [ "${SET:-}" ]; then  # the preset with SET's solver fields: a config file of its own
       python -m datagen.cli generate --preset paper-gnn --out /tmp/gnn.zarr --print-config | python -c '
 import json, sys
+from datagen.sim.settings import FLAT_NAMES
 cfg = json.load(sys.stdin)
 for kv in sys.argv[1].split(","):
     k, v = kv.split("=", 1)
-    cfg["simulation"]["solver"][k] = json.loads(v) if v[:1] in "0123456789-[{tf" else v
+    *groups, name = FLAT_NAMES.get(k, k).split(".")  # a flat name or group.field: its place in the groups
+    table = cfg["simulation"]["solver"]
+    for g in groups:
+        table = table[g]
+    table[name] = json.loads(v) if v[:1] in "0123456789-[{tf" else v
 json.dump(cfg, sys.stdout, indent=1)' "$SET" > "$W/paper_gnn_set.yaml" && gnn=("$W/paper_gnn_set.yaml")
     fi
     ( time DRAPE_CACHE_DIR="$GNN_CACHE" timeout ${GNN_SECONDS:-585} python -m datagen.cli generate "${gnn[@]}" \

@@ -8,6 +8,10 @@ itself. Range and choice limits go in the field's metadata::
 
 :func:`load_config` rejects unknown keys, wrong types and values outside those limits with a
 :class:`~datagen.errors.ConfigError` that names the key, the file and what is allowed.
+
+A nested dataclass is a nested table; a dotted key (``self_contact.radius = 0.004``, as ``--set``
+gives it) is read into its table too. A class whose keys moved into nested tables keeps its old keys
+readable with a ``config_aliases`` class attribute: old key -> its dotted place.
 """
 
 from __future__ import annotations
@@ -115,6 +119,7 @@ def _build(cls: type[T], data: Any, where: str, prefix: str) -> T:
         raise ConfigError(f"{where}: '{prefix or cls.__name__}' must be a table/mapping, got {type(data).__name__}")
     hints = typing.get_type_hints(cls)
     fields = {f.name: f for f in dataclasses.fields(cls) if f.init}
+    data = _nested(cls, data, fields, where, prefix)
     unknown = sorted(set(data) - set(fields))
     if unknown:
         raise ConfigError(
@@ -138,6 +143,31 @@ def _build(cls: type[T], data: Any, where: str, prefix: str) -> T:
         raise
     except (ValueError, TypeError) as exc:  # InputError is a ValueError: a component's own check
         raise ConfigError(f"{where}: {prefix + ': ' if prefix else ''}{exc}") from exc
+
+
+def _nested(cls: type, data: dict, fields: dict, where: str, prefix: str) -> dict:
+    """``data`` with every dotted key (``group.key``) and every key ``cls.config_aliases`` renames to
+    one moved into its group's table (a key given twice, in the table and outside it, is refused)."""
+    aliases = getattr(cls, "config_aliases", None) or {}
+    out, moved = {}, {}
+    for key, value in data.items():
+        head, dot, rest = aliases.get(key, key).partition(".")
+        if dot and head in fields:
+            moved.setdefault(head, []).append((key, rest, value))
+        else:
+            out[key] = value
+    for head, items in moved.items():
+        table = out.get(head, {})
+        if not isinstance(table, dict):
+            raise ConfigError(f"{where}: '{_dotted(prefix, head)}' must be a table/mapping, got {type(table).__name__}")
+        table = dict(table)
+        for key, rest, value in items:
+            if rest in table:
+                raise ConfigError(f"{where}: {_dotted(prefix, key)} and {_dotted(prefix, f'{head}.{rest}')} are the "
+                                  "same setting; give it once")
+            table[rest] = value
+        out[head] = table
+    return out
 
 
 def _dotted(prefix: str, name: str) -> str:

@@ -69,7 +69,7 @@ def main(argv: list[str] | None = None) -> int:
         logging.getLogger("matplotlib.font_manager").setLevel(logging.ERROR)
     if args.log_level != "debug":  # warp's banner, kernel-compile lines and CPU-only driver notice: debug only
         try:
-            from datagen.sim.scene import quiet_warp
+            from datagen.sim.device import quiet_warp
 
             quiet_warp(logging.ERROR, initialise=args.command in _WARP_COMMANDS)
         except ImportError:  # warp missing: the commands that need it say so

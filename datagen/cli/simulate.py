@@ -40,8 +40,9 @@ def _cmd_simulate(args) -> int:
     from datagen.body.shapes import resolve_betas
     from datagen.garment.types import make_garment
     from datagen.motion.library import make_motion
-    from datagen.sim.scene import RunConfig, Scene, simulate, warp_device
-    from datagen.sim.solver import SolverConfig
+    from datagen.sim.device import warp_device
+    from datagen.sim.scene import RunConfig, Scene, simulate
+    from datagen.sim.settings import SelfContactConfig, SolverConfig, StepConfig
 
     out = Path(args.out)
     if out.suffix != ".npz":
@@ -57,12 +58,13 @@ def _cmd_simulate(args) -> int:
     betas = resolve_betas(model, body=args.body)[0]
     garment = make_garment(args.garment, model, betas, seed=args.garment_seed)
     given = {k: v for k, v in (("substeps", args.substeps), ("iterations", args.iterations)) if v is not None}
-    config = RunConfig(solver=SolverConfig(**given, self_collision=not args.no_self_collision))
+    config = RunConfig(solver=SolverConfig(steps=StepConfig(**given),
+                                           self_contact=SelfContactConfig(enabled=not args.no_self_collision)))
     motion = make_motion(args.motion, seed=args.motion_seed, frames=config.motion_frames(args.frames, args.fps),
                          fps=args.fps)
     print(f"{args.garment} ({garment.vertex_count} vertices, {garment.material.name}) on {args.body}, "
-          f"{args.motion} {args.frames} frames at {args.fps:g} fps, {config.solver.substeps} substeps x "
-          f"{config.solver.iterations} "
+          f"{args.motion} {args.frames} frames at {args.fps:g} fps, {config.solver.steps.substeps} substeps x "
+          f"{config.solver.steps.iterations} "
           f"iterations, self-collision {'off' if args.no_self_collision else 'on'}, device {device}", flush=True)
     t0 = time.perf_counter()
 

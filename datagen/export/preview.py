@@ -31,7 +31,7 @@ import numpy as np
 from datagen.body.render import VIEWS, MeshLayer, pyplot, shade_polygons, view_rotation
 from datagen.errors import InputError, MissingDependencyError
 from datagen.export.animation import Animation
-from datagen.sim.scene import quiet_warp
+from datagen.sim.device import quiet_warp
 from datagen.export.usd import GARMENT_COLOR, REGION_COLORS
 from datagen.files import atomic_output, check_output_path
 from datagen.geometry.topology import unique_edges

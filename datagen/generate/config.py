@@ -8,7 +8,7 @@ table per split::
     frames = 60                     # recorded frames per sample (motion frames)
     [simulation]                    # datagen.sim.scene.RunConfig, and batch_size
     ramp = 1.0
-    [simulation.solver]             # datagen.sim.solver.SolverConfig
+    [simulation.solver.steps]       # datagen.sim.settings.SolverConfig, in groups
     substeps = 10
     [train]
     garments = ["tshirt:0", "pants:0"]      # type:seed

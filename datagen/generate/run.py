@@ -118,7 +118,7 @@ def preflight(plan, out: str | Path, *, executor: str, device: str | None, worke
     if out.exists() and not out.is_dir():
         raise InputError(f"--out {out} is a file; give a directory for the store")
     if executor == "local":
-        from datagen.sim.scene import warp_device
+        from datagen.sim.device import warp_device
 
         for d in parse_devices(device):
             warp_device(d)
@@ -136,7 +136,7 @@ def preflight(plan, out: str | Path, *, executor: str, device: str | None, worke
     posings = min(batch, len({(sc.body, sc.motion) for sc in plan.scenes}))  # distinct bodies in motion
     need = procs * frames * body_vertices * (posings * BODY_BYTES_PER_VERTEX_FRAME
                                              + min(16, posings, os.cpu_count() or 1) * POSING_BYTES_PER_VERTEX_FRAME)
-    from datagen.sim.scene import available_ram
+    from datagen.sim.device import available_ram
 
     free = available_ram()
     if executor == "local" and free is not None and need > free:

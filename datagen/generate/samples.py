@@ -99,7 +99,7 @@ def _init_worker(config, out: str) -> None:
     os.environ.setdefault("OMP_NUM_THREADS", "1")
     if logging.getLogger().level > logging.DEBUG:  # warp's banner, compile lines and driver notice: once, from the main process
         with contextlib.suppress(ImportError):
-            from datagen.sim.scene import quiet_warp
+            from datagen.sim.device import quiet_warp
 
             quiet_warp(logging.ERROR, initialise=True)
     plan = Plan(config)

@@ -38,6 +38,7 @@ import warp as wp
 from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, buckled_stiffness,
                                  friction_force_hessian, friction_limit, friction_part, hinge_gradients,
                                  lock_force_hessian, membrane_force_hessian, vec5)
+from datagen.sim.kernel_groups import BodyContact, Bending, Membrane, Substep, Vertices
 
 
 @wp.func
@@ -73,22 +74,9 @@ def _psd_stress(s00: float, s01: float, s11: float) -> wp.mat22:
 
 
 @wp.kernel
-def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
-                          inertia_target: wp.array(dtype=wp.vec3), mass: wp.array(dtype=float),
-                          active: wp.array(dtype=wp.int32), damping: wp.array(dtype=float),
-                          faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
-                          tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
-                          tri_lock: wp.array(dtype=wp.vec2), edges: wp.array2d(dtype=wp.int32),
-                          rest_angle: wp.array(dtype=float), bend_k: wp.array(dtype=float),
-                          v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
-                          v2e_offsets: wp.array(dtype=wp.int32), v2e: wp.array2d(dtype=wp.int32),
-                          body_has: wp.array2d(dtype=wp.int32), body_point: wp.array2d(dtype=wp.vec3),
-                          body_normal: wp.array2d(dtype=wp.vec3), body_radius: wp.array(dtype=float),
-                          body_disp: wp.array2d(dtype=wp.vec3), body_lambda: wp.array2d(dtype=float),
-                          friction: wp.array(dtype=float), vertex_area: wp.array(dtype=float),
-                          friction_used: wp.array(dtype=float), body_friction: int, friction_pressure: float,
-                          slip_prev: wp.array(dtype=float), body_k: float, eps_u: float, h: float,
-                          force_out: wp.array(dtype=wp.vec3), diag_other: wp.array(dtype=wp.mat33)):
+def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), verts: Vertices, membrane: Membrane, bending: Bending,
+                          body: BodyContact, sub: Substep, force_out: wp.array(dtype=wp.vec3),
+                          diag_other: wp.array(dtype=wp.mat33)):
     """Every vertex's force (inertia, membrane with lock and damping, bending, body contact and
     friction) and the 3x3 block of the Hessian that the element products do not give (inertia,
     lock, body contact and friction).
@@ -101,56 +89,59 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.
     it all back: an elastic skirt band on the hips, which narrow upwards, crept 8.5 cm up the body
     of a person standing still, and 25 of 32 skirts of a paper-motion-like store failed on slip.)
 
-    ``body_friction`` 2 (lagged) smooths the spring below the vertex's slide of the last substep
-    (``slip_prev``) instead: a vertex that slid keeps the Coulomb force μλ at that slide, where the
+    ``body.global_friction`` 2 (lagged) smooths the spring below the vertex's slide of the last substep
+    (``sub.slip``) instead: a vertex that slid keeps the Coulomb force μλ at that slide, where the
     stiff spring, linearised once, pulled it along with the skin with whatever force that took
     (the silk dress of the long runs tore at 121 % stretch, the pants at 361 %). 1: the stiff
     spring; 0: no friction here."""
     i = wp.tid()
-    if active[i] == 0:
+    if verts.active[i] == 0:
         force_out[i] = wp.vec3(0.0)
         diag_other[i] = wp.identity(n=3, dtype=float)
         return
     xi = x[i]
-    m_h2 = mass[i] / (h * h)
-    force = (inertia_target[i] - xi) * m_h2
+    m_h2 = verts.mass[i] / (sub.h * sub.h)
+    force = (sub.inertia_target[i] - xi) * m_h2
     hess = wp.identity(n=3, dtype=float) * m_h2
-    kd = damping[i]
-    for k in range(v2f_offsets[i], v2f_offsets[i + 1]):
-        f = v2f[k, 0]
-        local = v2f[k, 1]
-        fm, hm = membrane_force_hessian(i, local, f, x, x_prev, faces, dm_inv, tri_area, tri_stiff, tri_lock, kd, h)
+    kd = verts.damping[i]
+    for k in range(membrane.v2f_offsets[i], membrane.v2f_offsets[i + 1]):
+        f = membrane.v2f[k, 0]
+        local = membrane.v2f[k, 1]
+        fm, hm = membrane_force_hessian(i, local, f, x, sub.x_prev, membrane.faces, membrane.dm_inv, membrane.area,
+                                        membrane.stiffness, membrane.lock, kd, sub.h)
         force += fm
-        lk = tri_lock[f]
+        lk = membrane.lock[f]
         if lk[1] > 0.0:
-            D = dm_inv[f]
-            x0 = x[faces[f, 0]]
-            x1 = x[faces[f, 1]]
-            x2 = x[faces[f, 2]]
+            D = membrane.dm_inv[f]
+            x0 = x[membrane.faces[f, 0]]
+            x1 = x[membrane.faces[f, 1]]
+            x2 = x[membrane.faces[f, 2]]
             f0 = (x1 - x0) * D[0, 0] + (x2 - x0) * D[1, 0]
             f1 = (x1 - x0) * D[0, 1] + (x2 - x0) * D[1, 1]
-            fl, hl = lock_force_hessian(f0, f1, _corner_weights(D, local), lk[0], lk[1] * tri_area[f])
+            fl, hl = lock_force_hessian(f0, f1, _corner_weights(D, local), lk[0], lk[1] * membrane.area[f])
             hess += hl
-    for k in range(v2e_offsets[i], v2e_offsets[i + 1]):
-        e = v2e[k, 0]
-        if edges[e, 2] >= 0 and edges[e, 3] >= 0:
-            fb, hb = bending_force_hessian(i, v2e[k, 1], e, x, x_prev, edges, rest_angle, bend_k, kd, h)
+    for k in range(bending.v2e_offsets[i], bending.v2e_offsets[i + 1]):
+        e = bending.v2e[k, 0]
+        if bending.edges[e, 2] >= 0 and bending.edges[e, 3] >= 0:
+            fb, hb = bending_force_hessian(i, bending.v2e[k, 1], e, x, sub.x_prev, bending.edges, bending.rest_angle,
+                                           bending.stiffness, kd, sub.h)
             force += fb
-    r = body_radius[i]
-    for p in range(body_has.shape[1]):
-        if body_has[i, p] == 1:
-            fc, hc = body_plane_force_hessian(xi, body_point[i, p], body_normal[i, p], r, body_k)
+    r = body.radius[i]
+    for p in range(body.has.shape[1]):
+        if body.has[i, p] == 1:
+            fc, hc = body_plane_force_hessian(xi, body.point[i, p], body.normal[i, p], r, body.stiffness)
             force += fc
             hess += hc
-    if body_friction != 0:
-        best = friction_part(i, body_has, body_normal, body_lambda)
+    if body.global_friction != 0:
+        best = friction_part(i, body.has, body.normal, body.lam)
         if best >= 0:
-            limit = friction_limit(i, best, body_lambda, friction, vertex_area, friction_pressure, friction_used)
+            limit = friction_limit(i, best, body.lam, verts.friction, verts.area, body.friction_pressure,
+                                   body.friction_used)
             if limit > 0.0:
-                smooth = eps_u
-                if body_friction == 2:
-                    smooth = wp.max(eps_u, slip_prev[i])
-                ff, hf = friction_force_hessian((xi - x_prev[i]) - body_disp[i, best], body_normal[i, best], limit,
+                smooth = sub.eps_u
+                if body.global_friction == 2:
+                    smooth = wp.max(sub.eps_u, sub.slip[i])
+                ff, hf = friction_force_hessian((xi - sub.x_prev[i]) - body.disp[i, best], body.normal[i, best], limit,
                                                 smooth)
                 force += ff
                 hess += hf

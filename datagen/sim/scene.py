@@ -20,7 +20,6 @@ frame is flagged with the reason (and kept running, so the batch goes on).
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import os
 import time
@@ -32,9 +31,11 @@ import numpy as np
 from datagen.body.skeleton import face_parts
 from datagen.errors import InputError, SimulationError
 from datagen.materials import Material
+from datagen.sim.device import MEMORY_ADVICE, check_device_memory, torch_cuda, warp_device
+from datagen.sim.interface import SOLVERS, make_solver, solver_class
 from datagen.sim.metrics import METRIC_NAMES, Failure, FailureThresholds, Metrics
 from datagen.sim.model import ClothModelBuilder
-from datagen.sim.solver import SolverConfig, SolverVBD
+from datagen.sim.settings import SolverConfig
 from datagen.sim.state import BodyControl, ClothState
 
 log = logging.getLogger(__name__)
@@ -49,6 +50,7 @@ class RunConfig:
         lead_in: seconds from the rest pose into the motion's first pose.
         settle_pose: frames holding the first pose after the lead-in.
         ramp: seconds over which the motion starts from standstill (not recorded).
+        solver_name: which solver of :data:`datagen.sim.interface.SOLVERS` runs the scenes.
         solver: the solver's settings.
         thresholds: what makes a scene fail.
         freeze_failed: stop simulating a scene from the frame it fails (its vertices held where they
@@ -62,6 +64,7 @@ class RunConfig:
     lead_in: float = field(default=0.5, metadata={"min": 0.0, "max": 10.0})
     settle_pose: int = field(default=10, metadata={"min": 0, "max": 1000})
     ramp: float = field(default=1.0, metadata={"min": 0.0, "max": 10.0})
+    solver_name: str = field(default="vbd", metadata={"choices": tuple(SOLVERS)})
     solver: SolverConfig = field(default_factory=SolverConfig)
     thresholds: FailureThresholds = field(default_factory=FailureThresholds)
     freeze_failed: bool = True
@@ -70,6 +73,7 @@ class RunConfig:
         if self.settle_rest < 1 or self.settle_pose < 0 or self.lead_in < 0 or self.ramp < 0:
             raise InputError(f"settle_rest must be >= 1 and settle_pose, lead_in, ramp >= 0; got {self.settle_rest}, "
                              f"{self.settle_pose}, {self.lead_in}, {self.ramp}")
+        solver_class(self.solver_name)  # an unknown name is refused here, with the known ones
 
     def ramp_frames(self, fps: float) -> tuple[int, int]:
         """(R, K): simulated ramp frames (even) and the motion frames they play, K = R/2, which
@@ -296,7 +300,7 @@ def batch_arrays(scenes: list, lead_in: float, device: str | None = None) -> lis
         key = (id(s.body), np.asarray(s.betas, dtype=np.float64).tobytes(), id(s.motion))
         keys.append(key)
         todo.setdefault(key, s)
-    if todo and _torch_cuda(device):
+    if todo and torch_cuda(device):
         import torch
 
         modules: dict[int, object] = {}
@@ -314,15 +318,6 @@ def batch_arrays(scenes: list, lead_in: float, device: str | None = None) -> lis
         with threadpool_limits(limits=1, user_api="blas"), ThreadPoolExecutor(threads) as pool:
             posed = dict(zip(todo, pool.map(lambda sc: _posed_body(sc, lead_in), todo.values()), strict=True))
     return [s if k is None else scene_arrays(s, lead_in, posed[k]) for s, k in zip(scenes, keys, strict=True)]
-
-
-def _torch_cuda(device: str | None) -> bool:
-    """Whether warp ``device`` is a CUDA device that torch can use as well."""
-    if device is None or not str(device).startswith("cuda"):
-        return False
-    import torch
-
-    return torch.cuda.is_available()
 
 
 def frame_schedule(config: RunConfig, lead: int, n_motion: int, fps: float) -> tuple[list[float], int]:
@@ -350,115 +345,13 @@ def body_at(frames: np.ndarray, src: float) -> np.ndarray:
     return frames[i0] if w == 0 else (1 - w) * frames[i0] + w * frames[i0 + 1]
 
 
-BYTES_PER_GARMENT_VERTEX = 6_000
-"""Device memory a garment vertex takes in a batch, contact buffers included [bytes]: measured 3.4 kB
-(13.5 MB per scene of 3,974 vertices at 64 and 256 scenes on an H100, 18 MB alone), with room for
-the contact buffers to grow."""
-
-BYTES_PER_BODY_VERTEX = 400
-"""Device memory a body vertex takes (posed copies, the body's mesh with its tree and winding-number
-data) [bytes]; an upper bound since the part meshes went (2026-11-27)."""
-
-_MEMORY_ADVICE = ("Simulate fewer scenes at once (the dataset config's simulation.batch_size), coarser garments "
-                  "(a larger garment_edge_length) or use a device with more memory.")
-
-
-def quiet_warp(level: int = 30, *, initialise: bool = False) -> None:
-    """Keep warp's initialisation banner and per-module load lines off the console: only messages
-    of ``level`` or worse (logging's numbers: 30 warnings, 40 errors) pass. Recent warp versions
-    have ``config.log_level``, older ones ``config.quiet``. With ``initialise``, warp is initialised
-    now with the process's stderr silenced: its native library prints a "could not load the NVIDIA
-    CUDA driver" notice on every machine without a GPU, which no setting turns off (a command asked
-    for ``--device cuda`` there says so itself)."""
-    import warp as wp
-
-    if hasattr(wp.config, "log_level"):
-        wp.config.log_level = max(wp.config.log_level, level)
-    else:
-        wp.config.quiet = True
-    if initialise:
-        with _native_stderr_silenced():
-            wp.init()
-
-
-@contextlib.contextmanager
-def _native_stderr_silenced():
-    """File descriptor 2 pointed at /dev/null for the block: what native libraries print there
-    (warp's CUDA-driver notices) is dropped; Python's own errors are raised as usual."""
-    import sys
-
-    sys.stderr.flush()
-    saved = os.dup(2)
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 2)
-            yield
-    finally:
-        os.dup2(saved, 2)
-        os.close(saved)
-
-
-def warp_device(device: str | None) -> str:
-    """warp's name for ``device`` (``cpu``, ``cuda``, ``cuda:N``), or an :class:`InputError` that says
-    what is wrong and what to do (a CUDA device on a machine without one, a name warp does not know)."""
-    import warp as wp
-
-    try:
-        with _native_stderr_silenced():  # warp's C code prints CUDA-driver errors of its own on the way
-            return str(wp.get_device(device))
-    except (RuntimeError, ValueError) as exc:  # warp: unknown or absent device
-        if str(device).startswith("cuda"):
-            raise InputError(f"--device {device}: no CUDA device is usable here (warp: {exc}); use --device cpu, or run "
-                             "on a machine with an NVIDIA GPU and driver") from None
-        raise InputError(f"--device {device!r} is not a warp device; use cpu or cuda (cuda:N)") from None
-
-
-def device_free_bytes(device: str | None) -> int | None:
-    """Free memory of ``device`` [bytes]: a CUDA device's free memory, the CPU's available RAM;
-    None when it cannot be told."""
-    import warp as wp
-
-    dev = wp.get_device(device)
-    if dev.is_cuda:
-        return int(dev.free_memory)
-    return available_ram()
-
-
-def available_ram() -> int | None:
-    """Host memory that can be had without swapping [bytes]; None when it cannot be told."""
-    try:  # Linux: what can be had without swapping (page cache that can be dropped included)
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
-def check_device_memory(arrays: list[SceneArrays], device: str | None) -> int:
-    """Refuse a batch whose estimated memory exceeds what ``device`` has free, with the figures and
-    what to do (before anything is allocated); returns the estimate [bytes]."""
-    need = sum(len(a.garment_vertices) * BYTES_PER_GARMENT_VERTEX + a.body_frames.shape[1] * BYTES_PER_BODY_VERTEX
-               for a in arrays)
-    free = device_free_bytes(device)
-    if free is not None and need > free:
-        largest = max(len(a.garment_vertices) for a in arrays)
-        raise SimulationError(
-            f"a batch of {len(arrays)} scenes (largest garment {largest:,} vertices) needs about {need / 2**20:,.0f} MiB "
-            f"on device {device or 'default'}, which has {free / 2**20:,.0f} MiB free. {_MEMORY_ADVICE}")
-    return need
-
-
 def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(), device: str | None = None,
-             progress=None) -> list[SceneResult]:
+             progress=None, probes: tuple = ()) -> list[SceneResult]:
     """Run a batch of scenes in one model (one set of launches); see the module doc for the phases.
 
     All scenes' motions must have the same frame count, lead-in and frame rate (batch them by
-    length). ``progress(frame, frame_count)`` is called after every frame.
+    length). ``progress(frame, frame_count)`` is called after every frame; ``probes``
+    (:mod:`datagen.sim.probes`) are given to the solver.
     """
     if not scenes:
         raise InputError("no scenes to simulate")
@@ -484,14 +377,14 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
         t_built = time.perf_counter()
         model = builder.finalize(device)
         t_model = time.perf_counter()
-        solver = SolverVBD(model, config.solver)
+        solver = make_solver(config.solver_name, model, config.solver, probes=probes)
         metrics = Metrics(model)
     except RuntimeError as exc:  # warp: "Failed to allocate ..." when the estimate was too low
         if "alloc" not in str(exc).lower() and "memory" not in str(exc).lower():
             raise
         raise SimulationError(f"the device ran out of memory building a batch of {len(arrays)} scenes "
                               f"({sum(len(a.garment_vertices) for a in arrays):,} garment vertices): {exc}. "
-                              f"{_MEMORY_ADVICE}") from exc
+                              f"{MEMORY_ADVICE}") from exc
     log.info("set-up of %d scenes: %d bodies posed in %.1f s, the model in %.1f s, the solver and metrics in %.1f s",
              len(arrays), len({id(a.body_frames) for a in arrays}), t_posed - t_setup, t_model - t_built,
              time.perf_counter() - t_model)

@@ -1,18 +1,17 @@
 """The vertex block descent cloth solver: arranges the launches of :mod:`datagen.sim.kernels`.
 
 ``SolverVBD(model, config).step(state_in, state_out, control, dt)`` advances every scene of the
-model by ``dt`` (one frame) in ``config.substeps`` substeps of ``config.iterations`` colour sweeps,
+model by ``dt`` (one frame) in ``config.steps.substeps`` substeps of ``config.steps.iterations`` colour sweeps,
 with the body moving linearly from the previous control to ``control`` within the frame.
 """
 
 from __future__ import annotations
 
 import logging
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from datagen.errors import InputError, SimulationError
+from datagen.sim.settings import GLOBAL_FRICTION, REGISTER_CAPS, SolverConfig
 
 log = logging.getLogger(__name__)
 
@@ -55,215 +54,6 @@ def _reference_vertices(body_rest: np.ndarray, ranges: np.ndarray, scene_count: 
     return ref
 
 
-@dataclass(frozen=True, kw_only=True)
-class SolverConfig:
-    """Solver settings (SI units).
-
-    Attributes:
-        substeps: substeps per step (frame).
-        iterations: colour sweeps per substep.
-        gravity: gravitational acceleration [m/s²], Y up.
-        air_drag: linear air drag per area [kg/(m² s)].
-        body_stiffness: body contact stiffness k_c [N/m].
-        body_margin: extra body contact distance beyond the material thickness [m].
-        body_query: body contact search distance [m].
-        self_collision: vertex-triangle and edge-edge contacts of the cloth with itself.
-        self_radius: cloth-cloth contact distance [m].
-        self_stiffness: cloth-cloth contact stiffness [N/m].
-        self_friction: cloth-cloth Coulomb friction coefficient.
-        self_query: cloth-cloth search distance [m]: a vertex with a non-neighbouring cloth
-            primitive closer than this moves at most 0.4x that distance per substep.
-        self_bound_floor: distance to the nearest cloth primitive below which the move bound stops
-            shrinking [m] (primitives that already touch must not freeze a vertex). At most the
-            contact registration distance 1.5 x ``self_radius``: pairs farther apart than that are
-            not contacts, and each side moves at most 0.4x their distance, so they cannot cross;
-            pairs closer than it are contacts and their forces keep them apart. The default is that
-            largest safe floor: with a floor of 1 mm, a vertex caught in a fold moved at most 0.4 mm
-            per detection, could not follow the body, and its triangles tore (T-shirt walk: stretch
-            500 % at the start of the ramp, then a tangle of 1,700 crossings; with 6 mm: none).
-        bound_fraction: the share of its distance to the nearest non-neighbouring cloth primitive
-            that a vertex may move between two detections (below 0.5: two primitives that both
-            move that far towards each other still do not meet).
-        friction_velocity: velocity below which friction is smoothed (static) [m/s].
-        contact_capacity: initial contacts stored per vertex, triangle and edge (grows on demand).
-        chebyshev_rho: spectral radius estimate for Chebyshev acceleration of the sweeps (0: off).
-        chebyshev_contacts: whether the acceleration also extrapolates vertices that have cloth-cloth
-            (vertex-triangle) contacts; False leaves them at their sweep's result (a walking T-shirt's
-            sweeps then converge further; ``docs/simulator.md``, "How many sweeps").
-        chebyshev_body_contacts: the same for vertices in contact with the body.
-        global_iterations: conjugate-gradient iterations of the global Newton step that starts every
-            substep (:mod:`datagen.sim.newton_kernels`; 0: off, the sweeps alone). The sweeps carry
-            a load one vertex per sweep; woven cloth needs it carried across the garment at once.
-        body_projection: at the end of every substep, move vertices that ended inside the body
-            (winding-number test) out to its surface and take their inward velocity (see
-            ``projection_kernels.test_inside_body`` and ``move_out_of_body``).
-        projection_skip: let the projection's inside test skip a vertex that provably cannot have
-            entered the body since its last test (its distance from the body then exceeds how far it
-            and the body have moved since; ``projection_kernels.may_have_entered``). The result is the same as
-            testing every vertex (tested bitwise); off only to measure what it saves.
-        projection_reach: how far the projection's search for a way out (where the closest face's
-            normal does not lead outside) may move a vertex [m].
-        projection_accuracy: β of the projection's winding-number test (warp's fast winding number: a
-            subtree of the body's tree counts as its dipole when the point lies farther than β times
-            its radius). 1.25, not warp's 2: on 10.8 million points within 3 or 10 mm of the
-            default body posed in nine motions (walk, squat, sit_stand, lunge, box, dance_disco,
-            kick, bend_forward, arm_circles) every inside-or-out answer is β = 2's, in 0.47x the time
-            on the CPU (``benchmarks/winding_accuracy_probe.py``); at β = 1 one answer differed, at
-            0.75 a fifth. On an H100 the projection takes 0.45x its time at β = 2, the frame 0.83-0.86x
-            (``docs/simulator.md``). The penetration metric keeps β = 2, so it judges the projection
-            independently.
-        untangle_step: how far a vertex of a crossing of the cloth with itself moves per untangling
-            iteration [m] (0: off; at most ``self_radius``). Before each substep every edge that
-            crosses a triangle pushes the two apart along the gradient that shortens their
-            intersection contour (:mod:`datagen.sim.untangle_kernels`). The contacts stay on:
-            turning them off between the vertices of crossings let a tangle spread (T-shirt dance:
-            248 crossings against 22 without untangling).
-        untangle_iterations: untangling iterations before each substep (each a refit of the cloth's
-            triangle tree and an edge query). A crossing deeper than one step is pushed back by the
-            contacts of the next substep, which hold each side where it is: with one 2 mm
-            iteration a vertex poked 1.8 mm through the back of a T-shirt stayed there for 250
-            frames; with four, the first 84 frames of the T-shirt walk and dance cross nowhere
-            (the kernels alone clear that state's 20 crossings in four iterations).
-        detection_interval: sweeps between cloth-cloth detections within a substep (0: once per
-            substep); each detection renews the move bounds from the current positions, so cloth
-            pressed between the body and other cloth can follow a fast body. Every 5 sweeps (four
-            detections a substep, the default since the fourth session of 2026-11-28): the six long
-            runs pass with the crossings and strain of every 4 (at most 10 / 25 / 3 / 0 / 4 / 0
-            crossings against 14 / 25 / 4 / 3 / 4 / 0, strain p99 within 0.6 points) and a frame at
-            64 scenes takes 291.9 ms instead of 312.0 (H100, one run). Every 7 (three a substep):
-            273.2 ms, all pass but the dress walk crosses 13 times instead of 4; every 10 (two):
-            255.4 ms, the pants walk tears (308 % stretch at frame 125). Every 4 had ended the six
-            runs as every 2 in 0.76x the time (H200). ``docs/simulator.md``.
-        body_friction: Coulomb friction with the body (``kernels.body_stick_slip``); off only to
-            diagnose what it does.
-        friction_pressure: the largest body contact pressure that friction sees [Pa] (its normal
-            force per vertex is at most this x the vertex area). Where the skinned body overlaps
-            itself (the armpit), the penalty's normal force on cloth squeezed into the overlap
-            grows without bound (50 N per vertex for 5 mm) and would pin it while the arm drags its
-            neighbours on. An elastic waistband presses about 1-3 kPa (clothing pressure above
-            4 kPa is felt as uncomfortable); the weight of a garment about 100 Pa. At 1 kPa the
-            pants on their waistband hold still; at 300 Pa they crept down 1.5 cm/s; at 3 kPa a
-            patch sliding down a 35° plane dug in its front edge and lifted 12 mm.
-        global_friction: body friction in the global step: ``lagged`` (a Coulomb force smoothed
-            below the vertex's slide along the body over the last substep, so a vertex that slid is
-            held with μλ at that slide and one that stuck is held stiffly), ``stiff`` (smoothed
-            below ``friction_velocity`` x h only: a vertex in contact follows the body in the
-            linearised step with whatever force that takes) or ``off``. See
-            ``newton_kernels.vertex_force_diagonal``.
-        colour_hinge_wings: whether the sweeps' colouring also separates a hinge's two wing vertices
-            (the corners opposite its edge, which share only the bending stencil). False (the
-            default) colours by the triangles alone: a wing then reads the other wing's position
-            from the sweep before (a colour's results are written to a copy, so nothing depends on
-            thread order), and the walking T-shirt takes 5 colours instead of 8, so 5 sweep
-            launches instead of 8: on an H100 the sweeps take 121 ms a frame instead of 181 at 64
-            scenes, and the six long runs, the physics tests and Cusick pass (``docs/simulator.md``).
-        register_caps: which kernels run as their register-capped copies
-            (``detection_kernels.register_capped``: the same code under CUDA's
-            ``__launch_bounds__``, with more threads in flight and a few spills; bitwise the same
-            results on the CPU, which ignores the bound; on CUDA not yet compared bitwise):
-            ``none``; ``detection`` (the default: the two cloth-cloth queries and the projection's
-            inside test, 94 -> 80, 72 -> 64 and 80 -> 64 registers; on an H100 the frame takes
-            0.97x at 64 scenes and 0.94x at 256). Capping the old one-thread-per-vertex sweep
-            kernel too (116 -> 80 registers with spills) was slower, 1.02x and 1.11x, and is gone
-            with that kernel (``sweep_lanes``).
-        sweep_lanes: threads per vertex in the sweeps on a GPU (:mod:`datagen.sim.sweep_kernels`:
-            this many threads of a warp share a vertex's triangles, hinges, contact lists and body
-            planes and add their sums by shuffles in a fixed order). A power of two up to 32; on a
-            CPU one thread walks each vertex whatever this says. On an H100 at 64 scenes (with
-            ``coherent_order``) a sweep launch takes 100 us at 4 lanes, 119 at 1 (the one-thread
-            kernel: 112), 113 at 8 and 168 at 16; the frame 311.3 ms against 329.3 for the
-            one-thread kernel without ``coherent_order``, in one run (``docs/simulator.md``).
-        coherent_order: launch the tree queries (the cloth-cloth detection, the body contact
-            query, the projection, the untangling, and the per-frame penetration and crossing
-            metrics) with one thread per vertex or edge in Morton order of the rest shape
-            (``model.launch_order``), and sort every sweep colour the same way, so the threads of
-            a warp hold cloth near each other; False launches them in index order, in which a
-            garment's 32 consecutive vertices span most of it. The results are the same either
-            way, bitwise (each thread writes its own element; contact lists are sorted, distances
-            are minima and the untangling's pushes integer sums; tested). On an H100 at 64 scenes
-            it takes the detection from 105.2 to 98.4 ms a frame and the projection from 40.0 to
-            34.2 (``docs/simulator.md``).
-        cuda_graph: on a CUDA device, capture a step's launches (thousands per frame) once as a
-            CUDA graph and replay it: the same kernels in the same order, without Python's
-            per-launch cost. Off, or on a CPU, every launch is made from Python.
-    """
-
-    substeps: int = field(default=10, metadata={"min": 1, "max": 200})
-    iterations: int = field(default=20, metadata={"min": 1, "max": 200})
-    gravity: tuple[float, float, float] = (0.0, -9.81, 0.0)
-    air_drag: float = 0.02
-    body_stiffness: float = 1.0e4
-    body_margin: float = 0.002
-    body_query: float = 0.03
-    self_collision: bool = True
-    self_radius: float = 0.004
-    self_stiffness: float = 2.0e3
-    self_friction: float = 0.2
-    self_query: float = 0.01
-    self_bound_floor: float = 0.006
-    bound_fraction: float = 0.45
-    friction_velocity: float = 1.0e-3
-    contact_capacity: int = 16
-    chebyshev_rho: float = 0.7
-    chebyshev_contacts: bool = True
-    chebyshev_body_contacts: bool = True
-    detection_interval: int = 5
-    body_projection: bool = True
-    untangle_step: float = 0.002
-    untangle_iterations: int = field(default=4, metadata={"min": 1, "max": 20})
-    projection_skip: bool = True
-    projection_reach: float = 0.1
-    projection_accuracy: float = 1.25
-    body_friction: bool = True
-    friction_pressure: float = 1000.0
-    cuda_graph: bool = True
-    global_iterations: int = field(default=20, metadata={"min": 0, "max": 1000})
-    global_friction: str = "lagged"
-    colour_hinge_wings: bool = False
-    register_caps: str = "detection"
-    sweep_lanes: int = field(default=4, metadata={"min": 1, "max": 32})
-    coherent_order: bool = True
-
-    def __post_init__(self):
-        for name in ("substeps", "iterations"):
-            if int(getattr(self, name)) < 1:
-                raise InputError(f"solver {name} must be >= 1, got {getattr(self, name)}")
-        for name in ("body_stiffness", "body_query", "self_radius", "self_stiffness", "self_query",
-                     "friction_velocity", "self_bound_floor", "friction_pressure"):
-            if not float(getattr(self, name)) > 0:
-                raise InputError(f"solver {name} must be > 0, got {getattr(self, name)}")
-        if self.self_query <= self.self_radius:
-            raise InputError(f"self_query ({self.self_query}) must exceed self_radius ({self.self_radius})")
-        if not 0.0 <= float(self.untangle_step) <= self.self_radius:
-            raise InputError(f"untangle_step must be in [0, self_radius = {self.self_radius}] m (0: off), got "
-                             f"{self.untangle_step}: a longer jump can carry cloth through other cloth")
-        if int(self.untangle_iterations) < 1:
-            raise InputError(f"untangle_iterations must be >= 1, got {self.untangle_iterations}")
-        if self.register_caps not in REGISTER_CAPS:
-            raise InputError(f"register_caps must be one of {', '.join(REGISTER_CAPS)}, got {self.register_caps!r}")
-        if int(self.sweep_lanes) not in (1, 2, 4, 8, 16, 32):
-            raise InputError(f"sweep_lanes must be a power of two from 1 to 32 (a warp), got {self.sweep_lanes}")
-        if self.global_friction not in GLOBAL_FRICTION:
-            raise InputError(f"global_friction must be one of {', '.join(GLOBAL_FRICTION)}, got {self.global_friction!r}")
-        if not 0.0 < self.bound_fraction < 0.5:
-            raise InputError(f"bound_fraction must be in (0, 0.5), got {self.bound_fraction}: at 0.5 or more two "
-                             "cloth primitives moving towards each other could meet between detections")
-        if not float(self.projection_accuracy) >= 1.0:
-            raise InputError(f"projection_accuracy must be >= 1, got {self.projection_accuracy}: below 1 warp's "
-                             "winding number counts a body part as its dipole from inside its bounding sphere, and "
-                             "its inside-or-out answer breaks")
-        if self.self_bound_floor > 1.5 * self.self_radius + 1e-12:
-            raise InputError(f"self_bound_floor ({self.self_bound_floor}) must be at most 1.5 x self_radius "
-                             f"({1.5 * self.self_radius:g}), the distance within which cloth pairs are contacts")
-
-
-GLOBAL_FRICTION = {"off": 0, "stiff": 1, "lagged": 2}
-"""``SolverConfig.global_friction`` values and the code the global step's kernel takes."""
-
-_CAPPED_DETECTION = ("detect_vertex_triangle", "detect_edge_edge", "test_inside_body")
-REGISTER_CAPS = {"none": (), "detection": _CAPPED_DETECTION}
-"""``SolverConfig.register_caps`` values and the kernels each runs as their register-capped copies."""
-
 REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
 
@@ -291,22 +81,10 @@ def refit_on_streams(meshes, streams, device) -> None:
 class SolverVBD:
     """Vertex block descent (Chen et al. 2024) for cloth against moving bodies and itself."""
 
-    sweep_trace: list[tuple] | None = None
-    """A convergence probe for benchmarks (None in production, and then free; set it on an instance,
-    or on the class for solvers built inside :func:`~datagen.sim.scene.simulate`): when a list, every
-    sweep appends (substep, sweep, every vertex's move in that sweep [n] in m, and on a substep's
-    last sweep which vertices touch the body and which have cloth-cloth contacts [n] bool, else
-    None, None), read back to the host after the sweep, which syncs the device once per sweep; a
-    traced step is launched directly, never from a captured CUDA graph."""
-
-    cg_trace: list[np.ndarray] | None = None
-    """A probe of the global step's convergence, for benchmarks (None in production, and then
-    free): when a list, every global step appends its per-scene rᵀP⁻¹r before the first
-    conjugate-gradient iteration and after each one, [global_iterations + 1, scenes] float64, read
-    back after each iteration (a sync each); a traced step is launched directly, never from a
-    captured CUDA graph."""
-
-    def __init__(self, model, config: SolverConfig | None = None):
+    def __init__(self, model, config: SolverConfig | None = None, *, probes: tuple = ()):
+        """``probes``: :class:`~datagen.sim.probes.SolverProbe` objects the solver calls at the points
+        that protocol lists (none in production; with any, a step is launched directly, never
+        from a captured CUDA graph); the attribute ``probes`` may be set later too."""
         import warp as wp
 
         from datagen.sim import detection_kernels as D
@@ -317,8 +95,9 @@ class SolverVBD:
 
         self.model = model
         self.config = config or SolverConfig()
+        self.probes = tuple(probes)
         self.K, self.D, self.PK, self.S = K, D, PK, S
-        capped = REGISTER_CAPS[self.config.register_caps]
+        capped = REGISTER_CAPS[self.config.launch.register_caps]
         # the kernels launched below, each its register-capped copy where the config asks for it
         home = {"detect_vertex_triangle": D, "detect_edge_edge": D, "test_inside_body": PK}
         self._kernel = {name: getattr(home[name], name + ("_capped" if name in capped else "")) for name in home}
@@ -328,8 +107,8 @@ class SolverVBD:
             z3 = lambda k: wp.zeros(k, dtype=wp.vec3)
             self.x_prev, self.y, self.x_tmp = z3(n), z3(n), z3(n)
             h = m.host
-            cols = h.colours if self.config.colour_hinge_wings else triangle_colours(h)  # the sweeps' colours
-            if self.config.coherent_order:  # threads of one warp on cloth near each other (launch_order)
+            cols = h.colours if self.config.steps.colour_hinge_wings else triangle_colours(h)  # the sweeps' colours
+            if self.config.launch.coherent_order:  # threads of one warp on cloth near each other (launch_order)
                 vertex_order = launch_order(h.rest_positions, h.particle_range)
                 edge_order = launch_order(np.asarray(h.rest_positions)[np.asarray(h.edge_pairs)].mean(1), h.edge_range)
                 rank = np.empty(n, dtype=np.int64)
@@ -347,7 +126,7 @@ class SolverVBD:
             self.slip = wp.zeros(n, dtype=float)
             self.v_old = z3(n)
             self.scene_frozen = wp.zeros(m.scene_count, dtype=wp.int32)  # 1: frozen (:meth:`freeze`)
-            if self.config.global_iterations:  # the global step's vectors, blocks and per-scene scalars
+            if self.config.steps.global_iterations:  # the global step's vectors, blocks and per-scene scalars
                 self.cg_force, self.cg_r, self.cg_z, self.cg_p, self.cg_q, self.cg_d = (z3(n) for _ in range(6))
                 self.cg_diag_other, self.cg_diag_el, self.cg_inverse = (wp.zeros(n, dtype=wp.mat33) for _ in range(3))
                 self.cg_rz, self.cg_rz_new, self.cg_pq = (wp.zeros(m.scene_count, dtype=wp.float64) for _ in range(3))
@@ -369,7 +148,7 @@ class SolverVBD:
             self._lagged_saved = (wp.zeros((n, P), dtype=float), z3(n), wp.zeros(n, dtype=float))
             self.body_has = wp.zeros((n, P), dtype=wp.int32)
             self.body_point, self.body_normal, self.body_disp = (wp.zeros((n, P), dtype=wp.vec3) for _ in range(3))
-            self.body_radius = wp.array(m.host.thickness.astype(np.float32) + self.config.body_margin, dtype=float)
+            self.body_radius = wp.array(m.host.thickness.astype(np.float32) + self.config.body.margin, dtype=float)
             self.body_start = wp.clone(m.body_rest)
             self.body_prev_sub, self.body_sub = z3(nb), wp.clone(m.body_rest)
             self.x_det = wp.clone(m.rest_positions)
@@ -435,21 +214,51 @@ class SolverVBD:
             self.untangle_push = wp.zeros((n, 3), dtype=wp.int32)  # untangle_kernels.PUSH_SCALE units
             self.untangle_hits = wp.zeros(n, dtype=wp.int32)  # crossings each vertex is part of
             self.untangle_edges = wp.zeros(ne, dtype=wp.int32)  # edges that crossed at the first iteration
-        self._allocate_contacts(self.config.contact_capacity)
+        self._build_groups()
+        self._allocate_contacts(self.config.self_contact.capacity)
         self.contact_growths = 0
         self._graphs: dict[tuple, tuple] = {}
         """Captured CUDA graphs of a step, by (id(state), id(control), dt, capacity): (graph, state,
         control), the two kept alive because the graph reads their arrays (at most 9 kept)."""
 
+    def _build_groups(self) -> None:
+        """The per-vertex kernels' argument groups (:mod:`datagen.sim.kernel_groups`) over the model's
+        and the solver's arrays, made once: the cloth-cloth lists' group is remade when they grow
+        (:meth:`_allocate_contacts`), the substep's values are set once a step (:meth:`_step`)."""
+        from datagen.sim import kernel_groups as G
+
+        m, c = self.model, self.config
+        g = self.verts = G.Vertices()
+        g.mass, g.active, g.damping, g.friction, g.area = m.mass, m.active, m.damping, m.friction, m.vertex_area
+        g = self.membrane = G.Membrane()
+        g.faces, g.dm_inv, g.area, g.stiffness, g.lock = m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock
+        g.v2f_offsets, g.v2f = m.v2f_offsets, m.v2f
+        g = self.bending = G.Bending()
+        g.edges, g.rest_angle, g.stiffness, g.v2e_offsets, g.v2e = m.edges, m.rest_angle, m.bend_k, m.v2e_offsets, m.v2e
+        g = self.body_contact = G.BodyContact()
+        g.has, g.point, g.normal, g.disp = self.body_has, self.body_point, self.body_normal, self.body_disp
+        g.radius, g.lam, g.friction_used = self.body_radius, self.body_lambda, self.friction_used
+        g.stiffness, g.friction_pressure = c.body.stiffness, c.body.friction_pressure
+        g.friction = int(c.body.friction)
+        g.global_friction = GLOBAL_FRICTION[c.body.global_friction] if c.body.friction else 0
+        g = self.substep = G.Substep()
+        g.x_prev, g.x_det, g.inertia_target, g.bound, g.slip = self.x_prev, self.x_det, self.y, self.bound, self.slip
+
     def _allocate_contacts(self, cap: int) -> None:
         import warp as wp
 
-        m = self.model
+        from datagen.sim.kernel_groups import SelfContact
+
+        m, c = self.model, self.config
         with wp.ScopedDevice(m.device):
             self.capacity = int(cap)
             self.vt_tri = wp.zeros((m.particle_count, cap), dtype=wp.int32)
             self.tv_vert = wp.zeros((m.face_count, cap), dtype=wp.int32)
             self.ee_edge = wp.zeros((m.edge_count, cap), dtype=wp.int32)
+        g = self.self_contact = SelfContact()
+        g.vt_count, g.vt_tri, g.tv_count, g.tv_vert = self.vt_count, self.vt_tri, self.tv_count, self.tv_vert
+        g.ee_count, g.ee_edge = self.ee_count, self.ee_edge
+        g.radius, g.stiffness, g.friction = c.self_contact.radius, c.self_contact.stiffness, c.self_contact.friction
 
     def freeze(self, state, scene: int) -> None:
         """Stop simulating scene ``scene`` (one that failed): from the next step its vertices are
@@ -511,7 +320,7 @@ class SolverVBD:
         # so a step redone after its buffers grew gives what a step with big enough buffers gives,
         # and a scene does not depend on whether another scene of its batch overflowed
         lagged = (self.body_lambda, self.v_old, self.slip)
-        if self.config.self_collision:  # only cloth-cloth contact lists can overflow
+        if self.config.self_contact.enabled:  # only cloth-cloth contact lists can overflow
             for a, b in zip(lagged, self._lagged_saved):
                 wp.copy(b, a)
         for _attempt in range(6):
@@ -540,7 +349,7 @@ class SolverVBD:
 
         dev = wp.get_device(self.model.device)
         # the probes read arrays back inside the step, which a captured graph cannot do
-        if not (self.config.cuda_graph and dev.is_cuda) or self.sweep_trace is not None or self.cg_trace is not None:
+        if not (self.config.launch.cuda_graph and dev.is_cuda) or self.probes:
             self._step(state, control, dt)
             return self._needed()
         # a graph bakes in its arrays and constants: one per (state, control, dt, capacity)
@@ -552,7 +361,7 @@ class SolverVBD:
             wp.load_module(self.K, device=dev)  # compile before capturing
             wp.load_module(self.D, device=dev)
             wp.load_module(self.S, device=dev)
-            if self.config.global_iterations:
+            if self.config.steps.global_iterations:
                 from datagen.sim import newton_kernels
 
                 wp.load_module(newton_kernels, device=dev)
@@ -563,7 +372,7 @@ class SolverVBD:
         return self._needed()
 
     def _needed(self) -> int:
-        return int(self.needed.numpy().max()) if self.config.self_collision else 0
+        return int(self.needed.numpy().max()) if self.config.self_contact.enabled else 0
 
     def _detect_self(self) -> None:
         """Cloth-cloth pairs and every vertex's move bound at the positions ``x_det``."""
@@ -575,7 +384,7 @@ class SolverVBD:
         self.vt_count.zero_()
         self.tv_count.zero_()
         self.ee_count.zero_()
-        if c.self_collision:
+        if c.self_contact.enabled:
             xd = self.x_det
             wp.launch(D.face_bounds, nf, inputs=[xd, m.faces, self.face_lo, self.face_hi])
             self.face_bvh.refit()
@@ -583,12 +392,13 @@ class SolverVBD:
             self.edge_bvh.refit()
             wp.launch(self._kernel["detect_vertex_triangle"], n,
                       inputs=[self.face_bvh.id, xd, m.rest_positions, m.particle_scene, m.faces,
-                              m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, m.active,
+                              m.nbr_offsets, m.nbr, c.self_contact.query, c.self_contact.radius * 1.5, m.active,
                               self.vt_count, self.vt_tri, self.tv_count, self.tv_vert, self.min_dist,
                               self.vertex_order])
             wp.launch(self._kernel["detect_edge_edge"], ne,
                       inputs=[self.edge_bvh.id, xd, m.rest_positions, m.particle_scene, m.edge_pairs,
-                              m.nbr_offsets, m.nbr, c.self_query, c.self_radius * 1.5, self.scene_frozen,
+                              m.nbr_offsets, m.nbr, c.self_contact.query, c.self_contact.radius * 1.5,
+                              self.scene_frozen,
                               self.ee_count, self.ee_edge, self.min_dist, self.edge_order])
             wp.launch(D.sort_lists, n, inputs=[self.vt_count, self.vt_tri])
             wp.launch(D.sort_lists, nf, inputs=[self.tv_count, self.tv_vert])
@@ -596,7 +406,8 @@ class SolverVBD:
             wp.launch(D.count_needed, n, inputs=[self.vt_count, self.needed, 0])
             wp.launch(D.count_needed, nf, inputs=[self.tv_count, self.needed, 1])
             wp.launch(D.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
-        wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.bound_fraction, c.self_bound_floor, self.bound])
+        wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.self_contact.bound_fraction, c.self_contact.bound_floor,
+                                              self.bound])
 
     def _untangle(self, x) -> None:
         """``untangle_iterations`` steps of intersection contour minimisation at ``x``: every vertex of
@@ -609,7 +420,7 @@ class SolverVBD:
         from datagen.sim import untangle_kernels as U
 
         m = self.model
-        for it in range(self.config.untangle_iterations):
+        for it in range(self.config.self_contact.untangle_iterations):
             self.untangle_push.zero_()
             self.untangle_hits.zero_()
             wp.launch(self.D.face_bounds, m.face_count, inputs=[x, m.faces, self.face_lo, self.face_hi])
@@ -618,7 +429,7 @@ class SolverVBD:
                 self.face_bvh.id, x, m.particle_scene, m.faces, m.edges, self.scene_frozen, int(it > 0),
                 self.untangle_edges, self.untangle_push, self.untangle_hits, self.edge_order])
             wp.launch(U.apply_untangle, m.particle_count, inputs=[self.untangle_push, self.untangle_hits, m.active,
-                                                                  self.config.untangle_step, x])
+                                                                  self.config.self_contact.untangle_step, x])
 
     def _global_step(self, x, h: float) -> None:
         """One Newton step of the substep's incremental potential from the initial guess ``x``,
@@ -630,14 +441,8 @@ class SolverVBD:
 
         m, c = self.model, self.config
         n, nf, ne = m.particle_count, m.face_count, m.edge_count
-        eps_u = c.friction_velocity * h
-        wp.launch(N.vertex_force_diagonal, n, inputs=[
-            x, self.x_prev, self.y, m.mass, m.active, m.damping, m.faces, m.dm_inv, m.tri_area, m.tri_stiff,
-            m.tri_lock, m.edges, m.rest_angle, m.bend_k, m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-            self.body_has, self.body_point, self.body_normal, self.body_radius, self.body_disp, self.body_lambda,
-            m.friction, m.vertex_area, self.friction_used,
-            GLOBAL_FRICTION[c.global_friction] if c.body_friction else 0, c.friction_pressure, self.slip,
-            c.body_stiffness, eps_u, h, self.cg_force, self.cg_diag_other])
+        wp.launch(N.vertex_force_diagonal, n, inputs=[x, self.verts, self.membrane, self.bending, self.body_contact,
+                                                      self.substep, self.cg_force, self.cg_diag_other])
         # x stays put while the iterations run: each element is linearised once, not once an iteration
         wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
                                                     self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
@@ -657,8 +462,10 @@ class SolverVBD:
 
         wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
         dot(r, z, rz)
-        trace = [rz.numpy().copy()] if self.cg_trace is not None else None
-        for _ in range(c.global_iterations):
+        probes = self.probes
+        for probe in probes:
+            probe.global_residual(self, 0, rz, c.steps.global_iterations == 0)
+        for it in range(c.steps.global_iterations):
             wp.launch(N.membrane_product, nf, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
                                                       self.cg_face_stress, self.cg_face_scale, p, self.cg_face_part])
             wp.launch(N.bending_product, ne, inputs=[m.edges, self.cg_hinge_grad, self.cg_hinge_scale, p,
@@ -670,54 +477,47 @@ class SolverVBD:
             dot(r, z, rz_new)
             wp.launch(N.cg_direction, n, inputs=[z, m.particle_scene, rz, rz_new, p])
             rz, rz_new = rz_new, rz
-            if trace is not None:
-                trace.append(rz.numpy().copy())
-        if trace is not None:
-            self.cg_trace.append(np.stack(trace))
+            for probe in probes:
+                probe.global_residual(self, it + 1, rz, it + 1 == c.steps.global_iterations)
         wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
 
-    def _solve_colour(self, col, x, h: float, out) -> None:
+    def _solve_colour(self, col, x, out) -> None:
         """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``),
         ``sweep_lanes`` threads of a warp per vertex on a GPU, one on a CPU
         (:mod:`datagen.sim.sweep_kernels`)."""
         import warp as wp
 
         m, c = self.model, self.config
-        lanes = int(c.sweep_lanes) if self._on_cuda else 1  # a CPU thread walks a vertex alone
+        lanes = int(c.launch.sweep_lanes) if self._on_cuda else 1  # a CPU thread walks a vertex alone
         threads = col.shape[0] * lanes
         if lanes > 1:  # whole warps: every thread of a warp takes part in the lanes' shuffles
             threads = -(-threads // self.S.WARP_SIZE) * self.S.WARP_SIZE
         wp.launch(self.S.solve_colour, threads, device=m.device, inputs=[
-            col, x, self.x_prev, self.x_det, self.y, m.mass, m.active, self.bound, m.damping,
-            m.friction, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.tri_lock, m.edges, m.rest_angle, m.bend_k,
-            m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e,
-            self.body_has, self.body_point, self.body_normal, self.body_disp, self.body_radius,
-            self.body_lambda, c.body_stiffness, self.vt_count, self.vt_tri, self.tv_count, self.tv_vert,
-            self.ee_count, self.ee_edge, c.self_radius, c.self_stiffness, c.self_friction,
-            c.friction_velocity * h, h, m.vertex_area, int(c.body_friction), c.friction_pressure,
-            self.friction_used, lanes, out])
+            col, x, self.verts, self.membrane, self.bending, self.body_contact, self.self_contact, self.substep, lanes,
+            out])
 
     def _step(self, state, control, dt: float) -> None:
         import warp as wp
 
         K, m, c = self.K, self.model, self.config
         n, nb = m.particle_count, m.body_vertex_count
-        h = dt / c.substeps
+        h = dt / c.steps.substeps
+        self.substep.h, self.substep.eps_u = h, c.friction_velocity * h
         x, v = state.positions, state.velocities
         self.needed.zero_()
         self.projected.zero_()
         with wp.ScopedDevice(m.device):
-            for s in range(c.substeps):
-                if c.self_collision and c.untangle_step > 0.0:
+            for s in range(c.steps.substeps):
+                if c.self_contact.enabled and c.self_contact.untangle_step > 0.0:
                     # before the substep's solve, which relaxes the membrane around what it moved
                     # (after it, a 4-iteration jump was left in the frame: pants walk 53 % stretch)
                     self._untangle(x)
-                a1 = (s + 1) / c.substeps
-                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / c.substeps,
+                a1 = (s + 1) / c.steps.substeps
+                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / c.steps.substeps,
                                                           self.body_prev_sub])
                 wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1, self.body_sub])
                 self._refit_body()
-                if c.body_projection and c.projection_skip:
+                if c.projection.enabled and c.projection.skip:
                     P = m.body_part_count
                     self.part_lo.fill_(wp.vec3(BIG_BOX))
                     self.part_hi.fill_(wp.vec3(-BIG_BOX))
@@ -729,65 +529,64 @@ class SolverVBD:
                                                      c.air_drag, h, self.x_prev, self.y, state.pinned_target])
                 wp.launch(K.detect_body, n, inputs=[self.body_ids, m.body_face_base, m.body_face_part,
                                                     m.body_face_border, self.x_prev, m.particle_scene,
-                                                    m.body_faces, self.body_prev_sub, self.body_sub, c.body_query,
+                                                    m.body_faces, self.body_prev_sub, self.body_sub, c.body.query,
                                                     self.body_radius, m.active, self.y, self.body_has,
                                                     self.body_point, self.body_normal, self.body_disp,
                                                     self.vertex_order])
-                if c.body_friction:
+                if c.body.friction:
                     wp.launch(K.predict_body_friction, n, inputs=[
                         self.x_prev, m.mass, m.active, self.body_has, self.body_normal, self.body_disp,
-                        self.body_lambda, m.friction, m.vertex_area, c.friction_pressure, h, self.y,
+                        self.body_lambda, m.friction, m.vertex_area, c.body.friction_pressure, h, self.y,
                         self.friction_used])
                 wp.copy(self.x_det, self.x_prev)
                 self._detect_self()
                 wp.launch(K.initial_guess, n, inputs=[self.x_det, self.y, v, self.v_old, wp.vec3(*c.gravity), h,
                                                      self.body_lambda, self.bound, m.active, x])
-                if c.global_iterations:
+                if c.steps.global_iterations:
                     self._global_step(x, h)
                 wp.copy(self.x_nm1, x)
                 omega, cheb = 1.0, 0
-                rho = c.chebyshev_rho
-                for it in range(c.iterations):
-                    if self.sweep_trace is not None:
-                        before = x.numpy().copy()
-                    if c.self_collision and c.detection_interval and it and it % c.detection_interval == 0:
+                rho = c.steps.chebyshev_rho
+                probes = self.probes
+                for it in range(c.steps.iterations):
+                    for probe in probes:
+                        probe.before_sweep(self, s, it, x)
+                    every = c.self_contact.detection_interval
+                    if c.self_contact.enabled and every and it and it % every == 0:
                         wp.copy(self.x_det, x)
                         self._detect_self()
                         wp.copy(self.x_nm1, x)
                         omega, cheb = 1.0, 0
                     for col in self.colours:
-                        self._solve_colour(col, x, h, self.x_tmp)
+                        self._solve_colour(col, x, self.x_tmp)
                         wp.launch(K.copy_colour, col.shape[0], inputs=[col, self.x_tmp, x])
                     omega = 1.0 if cheb < 1 else (2.0 / (2.0 - rho * rho) if cheb == 1 else 4.0 / (4.0 - rho * rho * omega))
                     cheb += 1
-                    if it == c.iterations - 1:
+                    if it == c.steps.iterations - 1:
                         # the substep ends on a plain sweep: an extrapolated last iterate would set the
                         # velocities (a cloth at rest on a plane crept 80 mm in 2 s at 15 iterations)
                         omega = 1.0
                     wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
-                                                      omega, self.vt_count, int(not c.chebyshev_contacts),
-                                                      self.body_has, int(not c.chebyshev_body_contacts)])
-                    if self.sweep_trace is not None:
-                        last = it == c.iterations - 1
-                        self.sweep_trace.append((s, it, np.linalg.norm(x.numpy() - before, axis=1),
-                                                 (self.body_has.numpy() > 0).any(1) if last else None,
-                                                 self.vt_count.numpy() > 0 if last else None))
+                                                      omega, self.vt_count, int(not c.steps.chebyshev_contacts),
+                                                      self.body_has, int(not c.steps.chebyshev_body_contacts)])
+                    for probe in probes:
+                        probe.after_sweep(self, s, it, x, it == c.steps.iterations - 1)
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,
-                                                           self.body_radius, c.body_stiffness, self.body_lambda])
-                if c.global_iterations and c.global_friction == "lagged":
+                                                           self.body_radius, c.body.stiffness, self.body_lambda])
+                if c.steps.global_iterations and c.body.global_friction == "lagged":
                     wp.launch(K.record_slip, n, inputs=[x, self.x_prev, self.body_has, self.body_normal, self.body_disp,
                                                         self.body_lambda, self.slip])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v, self.v_old])
-                if c.body_projection:
+                if c.projection.enabled:
                     for again in range(2):  # a second pass for vertices the first put into another body part
                         wp.launch(self._kernel["test_inside_body"], n, inputs=[
-                            self.body_ids, m.particle_scene, self.body_sub, 2.0 * c.body_query, m.active, x, again,
+                            self.body_ids, m.particle_scene, self.body_sub, 2.0 * c.body.query, m.active, x, again,
                             self.projection_inside, self.projection_pending, self.projection_face, self.projection_uv,
                             self.body_ref, m.body_part_count, self.body_travel, self.part_lo, self.part_hi,
                             self.check_x, self.check_travel, self.check_bound, self.projection_skipped,
-                            int(c.projection_skip), float(c.projection_accuracy), self.vertex_order])
+                            int(c.projection.skip), float(c.projection.accuracy), self.vertex_order])
                         wp.launch(self.PK.move_out_of_body, n, inputs=[
                             self.body_ids, m.body_face_base, m.particle_scene, m.body_faces, self.body_prev_sub,
-                            self.body_sub, 2.0 * c.body_query, self.body_radius, h, c.projection_reach, x, v,
+                            self.body_sub, 2.0 * c.body.query, self.body_radius, h, c.projection.reach, x, v,
                             self.projected, self.projection_pending, self.projection_face, self.projection_uv,
-                            float(c.projection_accuracy), self.vertex_order])
+                            float(c.projection.accuracy), self.vertex_order])

@@ -20,8 +20,9 @@ from __future__ import annotations
 import warp as wp
 
 from datagen.sim.detection_kernels import triangle_closest_bary
+from datagen.sim.kernel_groups import BodyContact, Bending, Membrane, SelfContact, Substep, Vertices
 from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, body_stick_slip,
-                                 contact_force_hessian, friction_limit, friction_part, membrane_force_hessian, vec5)
+                                 contact_force_hessian, friction_limit, friction_part, membrane_force_hessian)
 
 WARP_SIZE = 32
 """Threads of a CUDA warp: the lanes of one vertex lie in one warp, and a launch is padded to whole warps
@@ -62,48 +63,12 @@ def lane_sum_mat33(m: wp.mat33, lanes: int) -> wp.mat33:
 def solve_colour(
     colour_verts: wp.array(dtype=wp.int32),
     x: wp.array(dtype=wp.vec3),
-    x_prev: wp.array(dtype=wp.vec3),
-    x_det: wp.array(dtype=wp.vec3),
-    inertia_target: wp.array(dtype=wp.vec3),
-    mass: wp.array(dtype=float),
-    active: wp.array(dtype=wp.int32),
-    bound: wp.array(dtype=float),
-    damping: wp.array(dtype=float),
-    friction: wp.array(dtype=float),
-    faces: wp.array2d(dtype=wp.int32),
-    dm_inv: wp.array(dtype=wp.mat22),
-    tri_area: wp.array(dtype=float),
-    tri_stiff: wp.array(dtype=vec5),
-    tri_lock: wp.array(dtype=wp.vec2),
-    edges: wp.array2d(dtype=wp.int32),
-    rest_angle: wp.array(dtype=float),
-    bend_k: wp.array(dtype=float),
-    v2f_offsets: wp.array(dtype=wp.int32),
-    v2f: wp.array2d(dtype=wp.int32),
-    v2e_offsets: wp.array(dtype=wp.int32),
-    v2e: wp.array2d(dtype=wp.int32),
-    body_has: wp.array2d(dtype=wp.int32),
-    body_point: wp.array2d(dtype=wp.vec3),
-    body_normal: wp.array2d(dtype=wp.vec3),
-    body_disp: wp.array2d(dtype=wp.vec3),
-    body_radius: wp.array(dtype=float),
-    body_lambda: wp.array2d(dtype=float),
-    body_k: float,
-    vt_count: wp.array(dtype=wp.int32),
-    vt_tri: wp.array2d(dtype=wp.int32),
-    tv_count: wp.array(dtype=wp.int32),
-    tv_vert: wp.array2d(dtype=wp.int32),
-    ee_count: wp.array(dtype=wp.int32),
-    ee_edge: wp.array2d(dtype=wp.int32),
-    self_radius: float,
-    self_k: float,
-    self_friction: float,
-    eps_u: float,
-    h: float,
-    vertex_area: wp.array(dtype=float),
-    body_friction: int,
-    friction_pressure: float,
-    friction_used: wp.array(dtype=float),
+    verts: Vertices,
+    membrane: Membrane,
+    bending: Bending,
+    body: BodyContact,
+    contact: SelfContact,
+    sub: Substep,
     lanes: int,
     x_out: wp.array(dtype=wp.vec3),
 ):
@@ -118,103 +83,108 @@ def solve_colour(
     i = int(0)
     if valid:
         i = colour_verts[slot]
-    live = valid and active[i] != 0
+    live = valid and verts.active[i] != 0
     xi = x[i]
-    m_h2 = mass[i] / (h * h)
+    m_h2 = verts.mass[i] / (sub.h * sub.h)
     force = wp.vec3(0.0)
     hess = wp.mat33(0.0)
     if live and lane == 0:
-        force = (inertia_target[i] - xi) * m_h2
+        force = (sub.inertia_target[i] - xi) * m_h2
         hess = wp.identity(n=3, dtype=float) * m_h2
-    first_face = v2f_offsets[i + 1]  # a vertex that is not live adds nothing
-    first_edge = v2e_offsets[i + 1]
+    first_face = membrane.v2f_offsets[i + 1]  # a vertex that is not live adds nothing
+    first_edge = bending.v2e_offsets[i + 1]
     own_contacts = int(0)
     parts = int(0)
     if live:
-        first_face = v2f_offsets[i] + lane
-        first_edge = v2e_offsets[i] + lane
-        own_contacts = wp.min(vt_count[i], vt_tri.shape[1])
-        parts = body_has.shape[1]
-    kd = damping[i]
+        first_face = membrane.v2f_offsets[i] + lane
+        first_edge = bending.v2e_offsets[i] + lane
+        own_contacts = wp.min(contact.vt_count[i], contact.vt_tri.shape[1])
+        parts = body.has.shape[1]
+    kd = verts.damping[i]
     # membrane
-    for k in range(first_face, v2f_offsets[i + 1], lanes):
-        fm, hm = membrane_force_hessian(i, v2f[k, 1], v2f[k, 0], x, x_prev, faces, dm_inv, tri_area, tri_stiff,
-                                        tri_lock, kd, h)
+    for k in range(first_face, membrane.v2f_offsets[i + 1], lanes):
+        fm, hm = membrane_force_hessian(i, membrane.v2f[k, 1], membrane.v2f[k, 0], x, sub.x_prev, membrane.faces,
+                                        membrane.dm_inv, membrane.area, membrane.stiffness, membrane.lock, kd, sub.h)
         force += fm
         hess += hm
     hel = hess  # inertia, membrane and bending: the stiffness friction acts against
     # bending (every edge stencil the vertex belongs to) and edge-edge contacts
-    for k in range(first_edge, v2e_offsets[i + 1], lanes):
-        e = v2e[k, 0]
-        local = v2e[k, 1]
-        if edges[e, 2] >= 0 and edges[e, 3] >= 0:
-            fb, hb = bending_force_hessian(i, local, e, x, x_prev, edges, rest_angle, bend_k, kd, h)
+    for k in range(first_edge, bending.v2e_offsets[i + 1], lanes):
+        e = bending.v2e[k, 0]
+        local = bending.v2e[k, 1]
+        if bending.edges[e, 2] >= 0 and bending.edges[e, 3] >= 0:
+            fb, hb = bending_force_hessian(i, local, e, x, sub.x_prev, bending.edges, bending.rest_angle,
+                                           bending.stiffness, kd, sub.h)
             force += fb
             hess += hb
             hel += hb
         if local < 2:
-            a = edges[e, 0]
-            b = edges[e, 1]
-            for kk in range(wp.min(ee_count[e], ee_edge.shape[1])):
-                f = ee_edge[e, kk]
-                c = edges[f, 0]
-                d = edges[f, 1]
+            a = bending.edges[e, 0]
+            b = bending.edges[e, 1]
+            for kk in range(wp.min(contact.ee_count[e], contact.ee_edge.shape[1])):
+                f = contact.ee_edge[e, kk]
+                c = bending.edges[f, 0]
+                d = bending.edges[f, 1]
                 st = wp.closest_point_edge_edge(x[a], x[b], x[c], x[d], 1.0e-12)
                 es = st[0]
                 et = st[1]
                 pa = x[a] * (1.0 - es) + x[b] * es
                 pb = x[c] * (1.0 - et) + x[d] * et
                 dist = wp.length(pa - pb)
-                if dist < self_radius and dist > 1.0e-9:
+                if dist < contact.radius and dist > 1.0e-9:
                     n = (pa - pb) / dist
                     we = 1.0 - es
                     if local == 1:
                         we = es
-                    rel = ((x[a] - x_prev[a]) * (1.0 - es) + (x[b] - x_prev[b]) * es) - (
-                        (x[c] - x_prev[c]) * (1.0 - et) + (x[d] - x_prev[d]) * et)
-                    fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, we)
+                    rel = ((x[a] - sub.x_prev[a]) * (1.0 - es) + (x[b] - sub.x_prev[b]) * es) - (
+                        (x[c] - sub.x_prev[c]) * (1.0 - et) + (x[d] - sub.x_prev[d]) * et)
+                    fc, hc = contact_force_hessian(rel, n, contact.radius - dist, contact.stiffness, contact.friction,
+                                                   sub.eps_u, we)
                     force += fc
                     hess += hc
     # vertex-triangle contacts with i as the vertex
     for kk in range(lane, own_contacts, lanes):
-        t = vt_tri[i, kk]
-        a = faces[t, 0]
-        b = faces[t, 1]
-        c = faces[t, 2]
+        t = contact.vt_tri[i, kk]
+        a = membrane.faces[t, 0]
+        b = membrane.faces[t, 1]
+        c = membrane.faces[t, 2]
         w = triangle_closest_bary(xi, x[a], x[b], x[c])
         p = x[a] * w[0] + x[b] * w[1] + x[c] * w[2]
         dist = wp.length(xi - p)
-        if dist < self_radius and dist > 1.0e-9:
+        if dist < contact.radius and dist > 1.0e-9:
             n = (xi - p) / dist
-            rel = (xi - x_prev[i]) - ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2])
-            fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, 1.0)
+            rel = (xi - sub.x_prev[i]) - ((x[a] - sub.x_prev[a]) * w[0] + (x[b] - sub.x_prev[b]) * w[1]
+                                          + (x[c] - sub.x_prev[c]) * w[2])
+            fc, hc = contact_force_hessian(rel, n, contact.radius - dist, contact.stiffness, contact.friction,
+                                           sub.eps_u, 1.0)
             force += fc
             hess += hc
     # vertex-triangle contacts with i as a corner of the triangle
-    for k in range(first_face, v2f_offsets[i + 1], lanes):
-        t = v2f[k, 0]
-        local = v2f[k, 1]
-        a = faces[t, 0]
-        b = faces[t, 1]
-        c = faces[t, 2]
-        for kk in range(wp.min(tv_count[t], tv_vert.shape[1])):
-            j = tv_vert[t, kk]
+    for k in range(first_face, membrane.v2f_offsets[i + 1], lanes):
+        t = membrane.v2f[k, 0]
+        local = membrane.v2f[k, 1]
+        a = membrane.faces[t, 0]
+        b = membrane.faces[t, 1]
+        c = membrane.faces[t, 2]
+        for kk in range(wp.min(contact.tv_count[t], contact.tv_vert.shape[1])):
+            j = contact.tv_vert[t, kk]
             w = triangle_closest_bary(x[j], x[a], x[b], x[c])
             p = x[a] * w[0] + x[b] * w[1] + x[c] * w[2]
             dist = wp.length(x[j] - p)
-            if dist < self_radius and dist > 1.0e-9:
+            if dist < contact.radius and dist > 1.0e-9:
                 n = (p - x[j]) / dist
-                rel = ((x[a] - x_prev[a]) * w[0] + (x[b] - x_prev[b]) * w[1] + (x[c] - x_prev[c]) * w[2]) - (
-                    x[j] - x_prev[j])
-                fc, hc = contact_force_hessian(rel, n, self_radius - dist, self_k, self_friction, eps_u, w[local])
+                rel = ((x[a] - sub.x_prev[a]) * w[0] + (x[b] - sub.x_prev[b]) * w[1]
+                       + (x[c] - sub.x_prev[c]) * w[2]) - (x[j] - sub.x_prev[j])
+                fc, hc = contact_force_hessian(rel, n, contact.radius - dist, contact.stiffness, contact.friction,
+                                               sub.eps_u, w[local])
                 force += fc
                 hess += hc
     # the body: one plane per part (the penalty along its normal; friction with the part that
     # presses hardest projects the step afterwards)
-    r = body_radius[i]
+    r = body.radius[i]
     for p in range(lane, parts, lanes):
-        if body_has[i, p] == 1:
-            fc, hc = body_plane_force_hessian(xi, body_point[i, p], body_normal[i, p], r, body_k)
+        if body.has[i, p] == 1:
+            fc, hc = body_plane_force_hessian(xi, body.point[i, p], body.normal[i, p], r, body.stiffness)
             force += fc
             hess += hc
     # the lanes' sums (every thread of the warp takes part)
@@ -229,13 +199,14 @@ def solve_colour(
     dx = wp.inverse(hess) * force
     new = xi + dx
     best = int(-1)
-    if body_friction != 0:
-        best = friction_part(i, body_has, body_normal, body_lambda)
+    if body.friction != 0:
+        best = friction_part(i, body.has, body.normal, body.lam)
     if best >= 0:
-        limit = friction_limit(i, best, body_lambda, friction, vertex_area, friction_pressure, friction_used)
-        new = body_stick_slip(new, x_prev[i], hel, body_normal[i, best], body_disp[i, best], limit)
-    move = new - x_det[i]
+        limit = friction_limit(i, best, body.lam, verts.friction, verts.area, body.friction_pressure,
+                               body.friction_used)
+        new = body_stick_slip(new, sub.x_prev[i], hel, body.normal[i, best], body.disp[i, best], limit)
+    move = new - sub.x_det[i]
     L = wp.length(move)
-    if L > bound[i]:
-        new = x_det[i] + move * (bound[i] / L)
+    if L > sub.bound[i]:
+        new = sub.x_det[i] + move * (sub.bound[i] / L)
     x_out[i] = new

@@ -128,7 +128,7 @@ def test_finished_store_is_left_alone_and_other_config_refused(local_store):
     assert generate(micro(simulation={**MICRO["simulation"], "batch_size": 1}), local_store)["simulated"] == 0
     attrs = read_root_attributes(local_store)
     assert attrs["code_version"] == code_version() and len(code_version()) == 16
-    assert "batch_size" not in attrs["config"]["simulation"] and attrs["config"]["simulation"]["solver"]["substeps"] == 3
+    assert "batch_size" not in attrs["config"]["simulation"] and attrs["config"]["simulation"]["solver"]["steps"]["substeps"] == 3
     with pytest.raises(InputError, match="frames"):
         generate(micro(frames=7), local_store)
     after = {p: p.stat().st_mtime_ns for p in local_store.rglob("*") if p.is_file()}
@@ -234,7 +234,7 @@ def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keep
     """One scene per batch; the device has room for the first batch only (its free memory is
     patched to 1 MiB after that): the run stops with an error that gives the figures and names
     simulation.batch_size, the first sample stays staged and the rest are missing, ready to resume."""
-    import datagen.sim.scene as sc
+    import datagen.sim.device as dv
     from datagen.generate.plan import Plan, open_writer
 
     calls = []
@@ -243,7 +243,7 @@ def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keep
         calls.append(device)
         return None if len(calls) == 1 else 2**20
 
-    monkeypatch.setattr(sc, "device_free_bytes", free)
+    monkeypatch.setattr(dv, "device_free_bytes", free)
     config = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "batch_size": 1}})
     out = tmp_path / "small-device.zarr"
     with pytest.raises(SimulationError) as exc:

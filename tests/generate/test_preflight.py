@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-import datagen.sim.scene as scene
+import datagen.sim.device as device
 from datagen.errors import InputError
 from datagen.generate.config import resolve_config, with_batch_size
 from datagen.generate.plan import Plan
@@ -24,9 +24,9 @@ def test_memory_for_posed_bodies_counts_each_body_motion_once(tmp_path, monkeypa
     monkeypatch.setattr("shutil.disk_usage", lambda _p: usage(2**50, 0, 2**50))  # the disk check is another test's
     need = frames * verts * (84 * BODY_BYTES_PER_VERTEX_FRAME + 16 * POSING_BYTES_PER_VERTEX_FRAME)
     assert need < 10 * 2**30  # the old per-scene float64 estimate said 46.5 GiB
-    monkeypatch.setattr(scene, "available_ram", lambda: need + 1)
+    monkeypatch.setattr(device, "available_ram", lambda: need + 1)
     preflight(plan, tmp_path / "ok.zarr", executor="local", device="cpu", workers=0)
-    monkeypatch.setattr(scene, "available_ram", lambda: need - 1)
+    monkeypatch.setattr(device, "available_ram", lambda: need - 1)
     with pytest.raises(InputError, match=r"252 scenes of 309 simulated frames needs about .* simulation.batch_size"):
         preflight(plan, tmp_path / "no.zarr", executor="local", device="cpu", workers=0)
     assert not (tmp_path / "no.zarr").exists()

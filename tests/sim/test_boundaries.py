@@ -56,5 +56,6 @@ def test_the_projection_accuracy_below_one_is_refused():
 
     assert SolverConfig().projection_accuracy == 1.25
     assert SolverConfig(projection_accuracy=1.0).projection_accuracy == 1.0
-    with pytest.raises(InputError, match="projection_accuracy must be >= 1, got 0.75"):
+    with pytest.raises(InputError, match="ProjectionConfig.accuracy = 0.75 is out of range; allowed: 1 <= accuracy: "
+                                         "below 1 warp's winding number"):
         SolverConfig(projection_accuracy=0.75)

@@ -1,11 +1,12 @@
-"""The solver's convergence probes (``SolverVBD.cg_trace``, ``SolverVBD.sweep_trace``) record what
-they say and change nothing: a traced run is bitwise the untraced one (CPU)."""
+"""The solver's convergence probes (:class:`~datagen.sim.probes.CgTrace`, :class:`~datagen.sim.probes.SweepTrace`,
+called back by the solver) record what they say and change nothing: a traced run is bitwise the untraced one (CPU)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from datagen.sim.model import ClothModelBuilder
+from datagen.sim.probes import CgTrace, SweepTrace
 from datagen.sim.solver import SolverConfig, SolverVBD
 from datagen.sim.state import BodyControl, ClothState
 from tests.sim.meshes import grid
@@ -25,15 +26,16 @@ def _run(trace: bool, frames: int = 3):
     b.add_body(sv, sf)
     model = b.finalize("cpu")
     solver = SolverVBD(model, SolverConfig(substeps=SUBSTEPS, iterations=ITERATIONS, global_iterations=GLOBAL))
+    cg, sweeps = CgTrace(), SweepTrace()
     if trace:
-        solver.cg_trace, solver.sweep_trace = [], []
+        solver.probes = (cg, sweeps)
     s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
     out = []
     for _ in range(frames):
         solver.step(s0, s1, BodyControl.from_numpy(model, sv), 1.0 / 30)
         s0, s1 = s1, s0
         out.append(s0.numpy()[0].copy())
-    return np.stack(out), solver.cg_trace, solver.sweep_trace
+    return np.stack(out), cg.entries, sweeps.entries
 
 
 def test_traces_record_every_step_and_change_nothing():

@@ -6,6 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+import datagen.sim.device as dv
 import datagen.sim.scene as sc
 from datagen.errors import SimulationError
 from datagen.materials import MATERIALS
@@ -46,9 +47,9 @@ def test_a_batch_too_large_for_the_device_is_refused_before_anything_is_allocate
     the device has free; a batch that does not fit is refused with both figures and what to do,
     before the model is built (here the device is told to have 1 MiB free)."""
     scenes = [falling_patch(), falling_patch(n=20)]
-    need = sc.check_device_memory(scenes, "cpu")
-    assert need == (36 + 400) * sc.BYTES_PER_GARMENT_VERTEX + 2 * 4 * sc.BYTES_PER_BODY_VERTEX
-    monkeypatch.setattr(sc, "device_free_bytes", lambda device: 2**20)
+    need = dv.check_device_memory(scenes, "cpu")
+    assert need == (36 + 400) * dv.BYTES_PER_GARMENT_VERTEX + 2 * 4 * dv.BYTES_PER_BODY_VERTEX
+    monkeypatch.setattr(dv, "device_free_bytes", lambda device: 2**20)
     built = []
     monkeypatch.setattr(sc.ClothModelBuilder, "finalize", lambda *a, **k: built.append(1))
     with pytest.raises(SimulationError) as exc:
@@ -148,4 +149,29 @@ def test_posing_with_the_torch_body_agrees_with_numpy(small_model):
     np.testing.assert_allclose(b[2], a[2], rtol=0, atol=4e-7)  # metres: a float32 ulp at 2-4 m
     np.testing.assert_allclose(b[3], a[3], rtol=0, atol=1e-12)
     np.testing.assert_array_equal(b[4], a[4])
-    assert not sc._torch_cuda("cpu") and not sc._torch_cuda(None)
+    assert not dv.torch_cuda("cpu") and not dv.torch_cuda(None)
+
+
+def test_run_config_selects_its_solver_by_name_and_refuses_an_unknown_one():
+    """``RunConfig.solver_name`` picks a solver of ``datagen.sim.interface.SOLVERS`` (the VBD solver by
+    default, which satisfies the ``ClothSolver`` protocol); an unknown name is refused with the known ones,
+    built directly or from a config mapping."""
+    from datagen.config import load_config
+    from datagen.errors import ConfigError, InputError
+    from datagen.sim.interface import SOLVERS, ClothSolver, solver_class
+    from datagen.sim.solver import SolverVBD
+
+    from datagen.sim.interface import make_solver
+    from datagen.sim.model import ClothModelBuilder
+    from datagen.sim.solver import SolverConfig
+    from tests.sim.meshes import grid
+
+    assert RunConfig().solver_name == "vbd" and solver_class("vbd") is SolverVBD and set(SOLVERS) == {"vbd"}
+    b = ClothModelBuilder()
+    b.add_cloth(*grid(3, 3, 0.05), material_name="cotton")
+    solver = make_solver("vbd", b.finalize("cpu"), SolverConfig())
+    assert type(solver) is SolverVBD and isinstance(solver, ClothSolver) and solver.probes == ()
+    with pytest.raises(InputError, match=r"unknown solver 'xpbd'; known solvers: vbd"):
+        RunConfig(solver_name="xpbd")
+    with pytest.raises(ConfigError, match=r"solver_name = 'xpbd' is not allowed; choose one of \['vbd'\]"):
+        load_config(RunConfig, {"solver_name": "xpbd"})
