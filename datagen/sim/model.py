@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from datagen.errors import InputError
+from datagen.geometry.topology import unique_edges
 from datagen.materials import Material, material
 
 if TYPE_CHECKING:
@@ -609,9 +610,7 @@ def _topology(X: np.ndarray, F: np.ndarray) -> _Topology:
     V = len(X)
     he = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     opp = np.concatenate([F[:, 2], F[:, 0], F[:, 1]])
-    key = np.sort(he, axis=1)
-    uniq, inv, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    inv = inv.ravel()
+    uniq, inv, counts = unique_edges(F, return_inverse=True, return_counts=True)
     if counts.max() > 2:
         raise InputError(f"{int((counts > 2).sum())} cloth edges are shared by more than two triangles "
                          "(non-manifold): repair or remesh the garment")
