@@ -1,7 +1,7 @@
 """Compare two drape stores array by array (e.g. one made on one GPU against one made by the Ray
 executor on several): which arrays are bitwise equal, and the largest difference of the others.
 
-    python benchmarks/compare_stores.py A.zarr B.zarr [--skip samples/seconds] [--json out.json]
+    python -m benchmarks compare-stores A.zarr B.zarr [--skip samples/seconds] [--json out.json]
 
 Wall time per sample (``samples/seconds``) differs between any two runs and is skipped by default;
 the ``checksums`` attribute differs with it. Garment positions are compared in the store's own
@@ -13,14 +13,11 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from schemas.dataset import ARRAYS, POSITION_QUANTUM  # noqa: E402
+from schemas.dataset import ARRAYS, POSITION_QUANTUM
 
 TIMING = ("samples/seconds",)
 IGNORED_ATTRIBUTES = ("checksums",)
@@ -77,7 +74,3 @@ def main(argv=None) -> int:
     if args.json:
         args.json.write_text(json.dumps(result, indent=1))
     return 0 if result["all_equal"] else 1
-
-
-if __name__ == "__main__":
-    sys.exit(main())

@@ -3,7 +3,7 @@ triangle of every recorded frame against its garment's rest mesh
 (:func:`datagen.sim.metrics.principal_strain`), as median, p90, p99 and max, per material and per
 sample. Reads the store through its reader alone.
 
-    python benchmarks/garment_strain.py STORE [--every 1]
+    python -m benchmarks garment-strain STORE [--every 1]
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ from datagen.sim.metrics import principal_strain
 from datagen.store import open_store
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("store")
     ap.add_argument("--every", type=int, default=1, help="use every k-th recorded frame")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     store = open_store(args.store)
     materials, types = store.names["material_names"], store.names["garment_type_names"]
     per_material = defaultdict(list)
@@ -45,7 +45,3 @@ def main() -> None:
         s = np.concatenate(parts)
         print(f"{mat:<10} {len(s):16,d} {100 * np.median(s):9.2f} {100 * np.percentile(s, 90):7.2f} "
               f"{100 * np.percentile(s, 99):7.2f} {100 * s.max():7.2f}")
-
-
-if __name__ == "__main__":
-    main()
