@@ -8,7 +8,8 @@
 #   bash benchmarks/device_run.sh poll              wait (WAIT s, default 540) for the phase `start`ed, then print its
 #                                                    progress and logs and copy them to $OUT
 #
-# Phases (options are environment variables; `KEY=VALUE,KEY=VALUE` lists are SolverConfig fields):
+# Phases (options are environment variables; `KEY=VALUE,KEY=VALUE` lists are SolverConfig fields; DEVICE=cpu
+# with small inputs is a dry run of a phase on a CPU):
 #   six       the six 300-frame runs (T-shirt, dress, pants x walk, dance_disco) at the production settings:
 #             `python -m benchmarks sim run-scenes` on RUNS (default .simbench/runs.pkl), once per item of SETS
 #             (space-separated, "-": the defaults). Per run: failure, crossings, frames inside, strain; ms per frame.
@@ -25,7 +26,7 @@
 #   profile   `sim profile` (per kernel and per phase of a frame) at BATCHES (64,256), self-collision on, once per item
 #             of SETS; with BASE=DIR first the same in an earlier tree (a copy of its datagen/ and benchmarks/, e.g.
 #             `git archive REF datagen benchmarks | tar x -C .bench_base`): before and after on the same card.
-#   small     `drape generate --preset small` on the GPU under `time` (its figures: scenes passed, garment-frames/s end
+#   small     `drape generate --preset small` (or GEN: a preset or config file) on the GPU under `time` (its figures: scenes passed, garment-frames/s end
 #             to end), `drape validate`, `drape info`, then `python -m benchmarks garment-strain` on it; STORE
 #             (/tmp/small.zarr). With `start` when the kernels are not compiled yet.
 #   gnn       paper 000's GNN on STORE (made by `small` unless it is valid already): `drape train gnn` with CONFIG
@@ -53,6 +54,8 @@ cd "$ROOT" || exit 2
 OUT=${OUT:-/tmp/device-out}; W=${W:-/tmp/device-run}; mkdir -p "$OUT" "$W"
 RUNS=${RUNS:-.simbench/runs.pkl}; SIM_INPUTS=${SIM_INPUTS:-.simbench/sim_inputs.npz}
 NEWTON_RUNS=${NEWTON_RUNS:-.simbench/newton_runs.pkl}; STORE=${STORE:-/tmp/small.zarr}
+DEVICE=${DEVICE:-cuda}  # cpu: a dry run of a phase on a CPU (small inputs: RUNS, SIM_INPUTS, GEN, BATCHES)
+GEN=${GEN:---preset small}  # what `small` and `gnn` generate: a preset, or a config file
 D="python -m datagen.cli"
 B="python -m benchmarks"
 filter() { grep --line-buffered -v "^Module\|^Warp\|^     \"\|^     /\|CUDA Toolkit\|Devices:\|Kernel cache"; }  # warp's start-up listing
@@ -88,7 +91,7 @@ six)
     sets_args "$set"
     echo "### six runs, ${set}"
     [ "${SAVE:-0}" = 1 ] && args+=(--out-dir "$OUT/six_${set//[=,]/_}")  # for strain-regions, crossing-regions
-    $B sim run-scenes --inputs "$RUNS" --device cuda "${args[@]}" 2>&1 | filter \
+    $B sim run-scenes --inputs "$RUNS" --device "$DEVICE" "${args[@]}" 2>&1 | filter \
       | grep --line-buffered -v "frame [0-9]*/" | tee "$OUT/six_runs_${set//[=,]/_}.txt"
     step "six $set" $?
   done
@@ -96,23 +99,23 @@ six)
 figures)
   sets=(); opts=(); for kv in ${SET//,/ }; do sets+=(--set "$kv"); opts+=(--drape-option "$kv"); done
   if [ "${NEWTON:-1}" = 1 ]; then
-    $B newton --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda --batches "${NEWTON_BATCHES:-64,256}" \
+    $B newton --inputs "$NEWTON_RUNS" --scene tshirt/walk --device "$DEVICE" --batches "${NEWTON_BATCHES:-64,256}" \
       --self "${NEWTON_SELF:-on,off}" --frames 40 --check-filters --newton-launch "${NEWTON_LAUNCH:-graph}" \
       --profile "${NEWTON_PROFILE:-12}" "${opts[@]}" 2>&1 | filter > "$OUT/newton.txt"; step newton $?
     if [ "${NEWTON_PY_BATCHES:-64}" != none ]; then
-      $B newton --inputs "$NEWTON_RUNS" --scene tshirt/walk --device cuda --batches "${NEWTON_PY_BATCHES:-64}" \
+      $B newton --inputs "$NEWTON_RUNS" --scene tshirt/walk --device "$DEVICE" --batches "${NEWTON_PY_BATCHES:-64}" \
         --self "${NEWTON_SELF:-on,off}" --frames 40 --solvers newton --newton-launch python 2>&1 | filter \
         > "$OUT/newton_python.txt"; step newton-python $?
     fi
   fi
-  $B sim run --inputs "$SIM_INPUTS" --device cuda --batches "${BATCHES:-1,16,64,256}" --self on,off "${sets[@]}" 2>&1 \
+  $B sim run --inputs "$SIM_INPUTS" --device "$DEVICE" --batches "${BATCHES:-1,16,64,256}" --self on,off "${sets[@]}" 2>&1 \
     | filter > "$OUT/throughput.txt"; step throughput $?
   if [ -n "${PROFILE:-}" ]; then
-    $B sim profile --inputs "$SIM_INPUTS" --device cuda --batches "$PROFILE" --self on --frames 3 --top 12 "${sets[@]}" \
+    $B sim profile --inputs "$SIM_INPUTS" --device "$DEVICE" --batches "$PROFILE" --self on --frames 3 --top 12 "${sets[@]}" \
       2>&1 | filter > "$OUT/profile.txt"; step profile $?
   fi
   if [ "${SIX:-0}" = 1 ]; then
-    $B sim run-scenes --inputs "$RUNS" --device cuda "${sets[@]}" 2>&1 | filter | grep --line-buffered -v "frame [0-9]*/" \
+    $B sim run-scenes --inputs "$RUNS" --device "$DEVICE" "${sets[@]}" 2>&1 | filter | grep --line-buffered -v "frame [0-9]*/" \
       > "$OUT/six_runs.txt"; step six $?
   fi
   if [ -n "${GNN_CACHE:-}" ]; then
@@ -128,24 +131,24 @@ for kv in sys.argv[1].split(","):
 json.dump(cfg, sys.stdout, indent=1)' "$SET" > "$OUT/paper_gnn_set.yaml" && gnn=("$OUT/paper_gnn_set.yaml")
     fi
     ( time DRAPE_CACHE_DIR="$GNN_CACHE" timeout "${GNN_SECONDS:-585}" $D generate "${gnn[@]}" --out /tmp/gnn.zarr \
-        --device cuda ) > "$OUT/generate_gnn.log" 2>&1; step paper-gnn $?
+        --device "$DEVICE" ) > "$OUT/generate_gnn.log" 2>&1; step paper-gnn $?
   fi
   touch "$W/done" ;;
 profile)
   if [ -n "${BASE:-}" ]; then
     echo "### the earlier tree $BASE"
-    profile_in "$BASE" --inputs "$ROOT/$SIM_INPUTS" --device cuda --batches "${BATCHES:-64,256}" --self on --frames 3 \
+    profile_in "$BASE" --inputs "$ROOT/$SIM_INPUTS" --device "$DEVICE" --batches "${BATCHES:-64,256}" --self on --frames 3 \
       --top 14 2>&1 | filter | tee "$OUT/profile_base.txt" | grep -A16 "^=="
   fi
   for set in ${SETS:--}; do
     sets_args "$set"
     echo "### this tree, ${set}"
-    profile_in "$ROOT" --inputs "$ROOT/$SIM_INPUTS" --device cuda --batches "${BATCHES:-64,256}" --self on --frames 3 \
+    profile_in "$ROOT" --inputs "$ROOT/$SIM_INPUTS" --device "$DEVICE" --batches "${BATCHES:-64,256}" --self on --frames 3 \
       --top 14 "${args[@]}" 2>&1 | filter | tee "$OUT/profile_this_${set//[=,]/_}.txt" | grep -A16 "^=="
   done
   touch "$W/done" ;;
 small)
-  ( time $D generate --preset small --out "$STORE" --device cuda ) > "$OUT/generate_small.log" 2>&1; step generate $?
+  ( time $D generate $GEN --out "$STORE" --device "$DEVICE" ) > "$OUT/generate_small.log" 2>&1; step generate $?
   filter < "$OUT/generate_small.log" | grep -v "^scene \|it/s\]$" | tail -n 14
   $D validate "$STORE" 2>&1 | tee "$OUT/validate_small.txt"
   $D info "$STORE" > "$OUT/info_small.txt" 2>&1
@@ -154,13 +157,13 @@ small)
 gnn)
   RUN=${RUN:-/tmp/runs/gnn}; CONFIG=${CONFIG:-benchmarks/configs/gnn_small.yaml}
   if ! $D validate "$STORE" > /dev/null 2>&1; then
-    $D generate --preset small --out "$STORE" --device cuda > "$OUT/generate.log" 2>&1
+    $D generate $GEN --out "$STORE" --device "$DEVICE" > "$OUT/generate.log" 2>&1
   fi
   $D info "$STORE" > "$OUT/info.txt" 2>&1
-  $D train gnn --data "$STORE" --out "$RUN" --config "$CONFIG" --device cuda --force > "$OUT/train.log" 2>&1; step train $?
+  $D train gnn --data "$STORE" --out "$RUN" --config "$CONFIG" --device "$DEVICE" --force > "$OUT/train.log" 2>&1; step train $?
   cp "$RUN/run.json" "$OUT/"; cp "$RUN/train_summary.json" "$OUT/" 2>/dev/null
-  $D evaluate "$RUN" --split test --json "$OUT/eval_test.json" --device cuda > "$OUT/eval_test.log" 2>&1
-  $D evaluate "$RUN" --split val --max-frames 60 --json "$OUT/eval_val.json" --device cuda > "$OUT/eval_val.log" 2>&1
+  $D evaluate "$RUN" --split test --json "$OUT/eval_test.json" --device "$DEVICE" > "$OUT/eval_test.log" 2>&1
+  $D evaluate "$RUN" --split val --max-frames 60 --json "$OUT/eval_val.json" --device "$DEVICE" > "$OUT/eval_val.log" 2>&1
   SAMPLE=$(python -c "from datagen.store import open_store; print(int(open_store('$STORE').split('test', include_failed=False)[0]))")
   $D predict "$RUN" --data "$STORE" --sample "$SAMPLE" --out "$OUT/pred.usd" > "$OUT/predict.log" 2>&1
   python -c "
@@ -182,11 +185,11 @@ ddp)
 c.update({'max_batch_size': c['max_batch_size'] * $N} if 'max_batch_size' in c else {}); yaml.safe_dump(c, open('$CFG', 'w'))"
     fi
     torchrun --standalone --nproc-per-node "$N" -m datagen.cli train "$MODEL" --data "$STORE" --out "$W/runs/$MODEL$N" \
-      --config "$CFG" --device cuda --force > "$OUT/${MODEL}_ddp$N.log" 2>&1; step "ddp $N" $?
+      --config "$CFG" --device "$DEVICE" --force > "$OUT/${MODEL}_ddp$N.log" 2>&1; step "ddp $N" $?
     cp "$W/runs/$MODEL$N/train_summary.json" "$OUT/${MODEL}_summary_ddp$N.json"
     if [ "$N" -gt 1 ]; then  # the N-GPU checkpoint resumed on one GPU for one more epoch
       EPOCHS=$(python -c "import json; print(json.load(open('$W/runs/$MODEL$N/run.json'))['config']['epochs'] + 1)")
-      $D train "$MODEL" --data "$STORE" --out "$W/runs/$MODEL$N" --config "$CFG" --device cuda --resume \
+      $D train "$MODEL" --data "$STORE" --out "$W/runs/$MODEL$N" --config "$CFG" --device "$DEVICE" --resume \
         --epochs "$EPOCHS" > "$OUT/${MODEL}_resume_ddp${N}_on1.log" 2>&1; step "resume on 1" $?
     fi
   done

@@ -1,13 +1,18 @@
-"""Cloth simulator throughput: one T-shirt on the regular body walking, and batches of such scenes.
+"""Cloth simulator throughput: one T-shirt on the regular body walking, and batches of such scenes;
+and the long-run check scenes (the six 300-frame runs).
 
 Two steps, so the GPU host needs only numpy and warp:
 
     python -m benchmarks sim prepare --out sim_inputs.npz      # here: garment, body frames
     python -m benchmarks sim run --inputs sim_inputs.npz --device cuda --batches 1,16,64,256
+    python -m benchmarks sim profile --inputs sim_inputs.npz --device cuda --batches 64,256
+    python -m benchmarks sim prepare-runs --out runs.pkl --frames 300   # garments x motions
+    python -m benchmarks sim run-scenes --inputs runs.pkl --device cuda [--out-dir DIR]
 
 ``run`` prints, per batch size and with self-collision on and off: ms per frame, garment-frames
 per second, device memory per scene, and the metrics (penetrating vertices, self-intersections,
-max stretch) of the last frame of scene 0.
+max stretch) of the last frame of scene 0. ``profile``: each kernel's and each phase's ms per frame.
+``run-scenes``: per scene its summary (failure, crossings, penetration, strain) as JSON.
 """
 
 from __future__ import annotations
