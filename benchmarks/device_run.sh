@@ -60,6 +60,7 @@ D="python -m datagen.cli"
 B="python -m benchmarks"
 filter() { grep --line-buffered -v "^Module\|^Warp\|^     \"\|^     /\|CUDA Toolkit\|Devices:\|Kernel cache"; }  # warp's start-up listing
 sets_args() { args=(); [ "$1" != - ] && for kv in ${1//,/ }; do args+=(--set "$kv"); done; }  # "-" or k=v,k=v -> --set ...
+absolute() { case $1 in /*) echo "$1" ;; *) echo "$ROOT/$1" ;; esac; }
 step() { echo "$(date +%T) $1 exit $2" >> "$W/progress"; }
 
 # `sim profile` in TREE (this one, or an earlier copy that predates `python -m benchmarks`: its own script)
@@ -137,13 +138,13 @@ json.dump(cfg, sys.stdout, indent=1)' "$SET" > "$OUT/paper_gnn_set.yaml" && gnn=
 profile)
   if [ -n "${BASE:-}" ]; then
     echo "### the earlier tree $BASE"
-    profile_in "$BASE" --inputs "$ROOT/$SIM_INPUTS" --device "$DEVICE" --batches "${BATCHES:-64,256}" --self on --frames 3 \
+    profile_in "$BASE" --inputs "$(absolute "$SIM_INPUTS")" --device "$DEVICE" --batches "${BATCHES:-64,256}" --self on --frames 3 \
       --top 14 2>&1 | filter | tee "$OUT/profile_base.txt" | grep -A16 "^=="
   fi
   for set in ${SETS:--}; do
     sets_args "$set"
     echo "### this tree, ${set}"
-    profile_in "$ROOT" --inputs "$ROOT/$SIM_INPUTS" --device "$DEVICE" --batches "${BATCHES:-64,256}" --self on --frames 3 \
+    profile_in "$ROOT" --inputs "$(absolute "$SIM_INPUTS")" --device "$DEVICE" --batches "${BATCHES:-64,256}" --self on --frames 3 \
       --top 14 "${args[@]}" 2>&1 | filter | tee "$OUT/profile_this_${set//[=,]/_}.txt" | grep -A16 "^=="
   done
   touch "$W/done" ;;
