@@ -77,7 +77,7 @@ CASES: tuple[Case, ...] = (
     Case(name="sim", module="benchmarks.sim",
          summary="the simulator: prepare, run (ms per frame at batch sizes), profile (per kernel), prepare-runs, "
                  "run-scenes (the six 300-frame runs)"),
-    Case(name="newton", module="benchmarks.sim_newton", needs="newton (pip install -e '.[newton]')",
+    Case(name="newton", module="benchmarks.sim_newton", needs="newton for Newton's side (pip install -e '.[newton]')",
          summary="drape's solver and Newton's VBD side by side on one scene: ms per frame, penetration, crossings"),
     Case(name="convergence", module="benchmarks.convergence",
          summary="hanging strip of every material: elongation against the static answer, oscillation, energy balance"),
