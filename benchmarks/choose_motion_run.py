@@ -1,6 +1,6 @@
 """Choose the motion-generator run and latent by the validation split's generation figures.
 
-``python benchmarks/choose_motion_run.py OUT RUN...`` reads ``OUT/eval_<RUN>_val.json`` (``drape evaluate
+``python -m benchmarks choose-motion-run OUT RUN...`` reads ``OUT/eval_<RUN>_val.json`` (``drape evaluate
 RUN --split val --json ...``) for each run, prints one line per (run, latent) with FID, recognition
 accuracy, diversity and multimodality, and last the run and latent with the lowest generated FID (the
 Fréchet distance to the real motions in the recogniser's feature space: realism and label fidelity
@@ -9,13 +9,18 @@ at once). Only the validation split is read, so the test split stays unseen by t
 
 from __future__ import annotations
 
+import argparse
 import json
 import sys
 from pathlib import Path
 
 
-def main(argv: list[str]) -> int:
-    out, runs = Path(argv[0]), argv[1:]
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("out", type=Path, help="the folder of the eval_<RUN>_val.json files")
+    ap.add_argument("runs", nargs="+", help="the runs' names")
+    args = ap.parse_args(argv)
+    out, runs = args.out, args.runs
     rows = []
     for run in runs:
         path = out / f"eval_{run}_val.json"
@@ -41,7 +46,3 @@ def main(argv: list[str]) -> int:
     _, run, latent = min(rows)
     print(f"{run} {latent}")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main(sys.argv[1:]))

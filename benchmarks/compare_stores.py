@@ -1,7 +1,7 @@
 """Compare two drape stores array by array (e.g. one made on one GPU against one made by the Ray
 executor on several): which arrays are bitwise equal, and the largest difference of the others.
 
-    python benchmarks/compare_stores.py A.zarr B.zarr [--skip samples/seconds] [--json out.json]
+    python -m benchmarks compare-stores A.zarr B.zarr [--skip samples/seconds] [--json out.json]
 
 Wall time per sample (``samples/seconds``) differs between any two runs and is skipped by default;
 the ``checksums`` attribute differs with it. Garment positions are compared in the store's own
@@ -13,14 +13,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from schemas.dataset import ARRAYS, POSITION_QUANTUM  # noqa: E402
+from benchmarks.common import Benchmark
+from schemas.dataset import ARRAYS, POSITION_QUANTUM
 
 TIMING = ("samples/seconds",)
 IGNORED_ATTRIBUTES = ("checksums",)
@@ -56,28 +54,33 @@ def compare(a: Path, b: Path, skip=TIMING) -> dict:
             "all_equal": all(r["equal"] for r in rows.values()) and all(attrs.values())}
 
 
-def main(argv=None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("a", type=Path)
-    ap.add_argument("b", type=Path)
-    ap.add_argument("--skip", nargs="*", default=list(TIMING))
-    ap.add_argument("--json", type=Path, default=None)
-    args = ap.parse_args(argv)
-    result = compare(args.a, args.b, tuple(args.skip))
-    for name, row in result["arrays"].items():
-        if row["equal"]:
-            continue
-        extra = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()
-                          if k not in ("equal",))
-        print(f"  differs: {name}: {extra}")
-    equal = [n for n, r in result["arrays"].items() if r["equal"]]
-    print(f"{len(equal)} of {len(result['arrays'])} arrays bitwise equal (skipped: {', '.join(args.skip) or 'none'})")
-    bad_attrs = [k for k, v in result["attributes_equal"].items() if not v]
-    print("root attributes equal" if not bad_attrs else f"root attributes that differ: {', '.join(bad_attrs)}")
-    if args.json:
-        args.json.write_text(json.dumps(result, indent=1))
-    return 0 if result["all_equal"] else 1
+class CompareStores(Benchmark):
+    description = __doc__
+
+    def add_arguments(self, ap: argparse.ArgumentParser) -> None:
+        ap.add_argument("a", type=Path)
+        ap.add_argument("b", type=Path)
+        ap.add_argument("--skip", nargs="*", default=list(TIMING))
+        ap.add_argument("--json", type=Path, default=None)
+
+    def run(self, args) -> tuple[argparse.Namespace, dict]:
+        return args, compare(args.a, args.b, tuple(args.skip))
+
+    def report(self, out) -> int:
+        args, result = out
+        for name, row in result["arrays"].items():
+            if row["equal"]:
+                continue
+            extra = ", ".join(f"{k} {v:.4g}" if isinstance(v, float) else f"{k} {v}" for k, v in row.items()
+                              if k not in ("equal",))
+            print(f"  differs: {name}: {extra}")
+        equal = [n for n, r in result["arrays"].items() if r["equal"]]
+        print(f"{len(equal)} of {len(result['arrays'])} arrays bitwise equal (skipped: {', '.join(args.skip) or 'none'})")
+        bad_attrs = [k for k, v in result["attributes_equal"].items() if not v]
+        print("root attributes equal" if not bad_attrs else f"root attributes that differ: {', '.join(bad_attrs)}")
+        if args.json:
+            args.json.write_text(json.dumps(result, indent=1))
+        return 0 if result["all_equal"] else 1
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+main = CompareStores().main

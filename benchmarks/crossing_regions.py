@@ -4,8 +4,8 @@ how many of them are pinched by the body (both the edge and the triangle closer 
 ``--pinch`` x the cloth's contact distance, their nearest body points on different body parts:
 cloth caught where two parts of the body meet, as under an arm pressed to the torso).
 
-    python benchmarks/bench_sim.py run-scenes --inputs .simbench/runs.pkl --out-dir DIR [--device cuda]
-    python benchmarks/crossing_regions.py .simbench/runs.pkl DIR [--runs tshirt/dance_disco]
+    python -m benchmarks sim run-scenes --inputs .simbench/runs.pkl --out-dir DIR [--device cuda]
+    python -m benchmarks crossing-regions .simbench/runs.pkl DIR [--runs tshirt/dance_disco]
 """
 
 from __future__ import annotations
@@ -41,13 +41,13 @@ def frame_crossings(x: np.ndarray, faces: np.ndarray, edges: np.ndarray) -> np.n
     return np.stack([e, o[e, k]], 1)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("inputs", help="the prepared runs (bench_sim.py prepare-runs)")
+    ap.add_argument("inputs", help="the prepared runs (sim prepare-runs)")
     ap.add_argument("out_dir", help="the run's --out-dir (positions and body of every 10th recorded frame)")
     ap.add_argument("--runs", default="", help="comma-separated run names (default: every run with an output)")
     ap.add_argument("--pinch", type=float, default=2.0, help="pinched: within this many contact distances of the body")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     import trimesh
 
     from datagen.body.skeleton import face_parts
@@ -93,7 +93,3 @@ def main() -> None:
             print(f"  frame {10 * f:3d}: {len(pairs):3d} crossings, pinched between body parts {int(pinched.sum()):3d}, "
                   f"edge within reach of the body {int((de < reach).sum()):3d}; panels {top}; "
                   f"median distance to the body {1000 * np.median(np.minimum(de, dt)):.1f} mm")
-
-
-if __name__ == "__main__":
-    main()

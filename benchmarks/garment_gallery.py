@@ -1,28 +1,25 @@
 """Pictures of every garment type on the default body (docs/garments/<type>.png and docs/garments.png).
 
-    python benchmarks/garment_gallery.py --seed 0
+    python -m benchmarks garment-gallery --seed 0
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from datagen.body.cache import default_body
 from datagen.garment.render import render_garment
 from datagen.garment.types import GARMENT_TYPES, make_garment
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--out", default="docs/garments")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -49,7 +46,3 @@ def main() -> None:
     fig.tight_layout()
     fig.savefig(out.parent / "garments.png", dpi=110)
     print(f"wrote {out.parent / 'garments.png'}")
-
-
-if __name__ == "__main__":
-    main()

@@ -1,6 +1,6 @@
 """Tables 6/7/9 of paper 001's garment regressor from ``drape evaluate`` JSON files.
 
-``python benchmarks/garment_table.py OUT`` reads every ``OUT/eval_<RUN>_val.json`` and
+``python -m benchmarks garment-table OUT`` reads every ``OUT/eval_<RUN>_val.json`` and
 ``OUT/eval_<RUN>_test.json`` of a garment regressor run and prints, per template, one row per run
 (validation RMSE; test RMSE, Hausdorff, STED, normal cosine and the share of vertices inside the
 body) and the skinned template's test row (and the simulated garment's share inside, the reference:
@@ -11,8 +11,8 @@ for every run beside it.
 
 from __future__ import annotations
 
+import argparse
 import json
-import sys
 from pathlib import Path
 
 
@@ -21,8 +21,10 @@ def _inside(row: dict) -> str:
     return f"{100 * row['inside_share']:8.2f}" if "inside_share" in row else f"{'-':>8s}"
 
 
-def main(argv: list[str]) -> int:
-    out = Path(argv[0])
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("out", type=Path, help="the folder of the eval_<RUN>_val.json and eval_<RUN>_test.json files")
+    out = ap.parse_args(argv).out
     runs: dict[str, dict[str, dict]] = {}
     for path in sorted(out.glob("eval_*_*.json")):
         run, split = path.stem[len("eval_"):].rsplit("_", 1)
@@ -66,7 +68,3 @@ def main(argv: list[str]) -> int:
                 print(f"{'simulated garment':28s} {'':12s} {'':8s} {'':11s} | {'':12s} {'':12s} {'':10s} {'':10s} "
                       f"{100 * e_base['simulated_inside_share']:8.2f}")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main(sys.argv[1:]))

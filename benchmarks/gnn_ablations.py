@@ -5,7 +5,7 @@ Each run is a ``drape train gnn`` run directory; its curve is ``val/detail_mm`` 
 logs (every attempt, so resumed runs are whole). Where the run directory holds ``eval_test.json``
 (``drape evaluate RUN --split test --json RUN/eval_test.json``), its errors join the table.
 
-    python benchmarks/gnn_ablations.py NAME=RUN [NAME=RUN ...] --out DIR
+    python -m benchmarks gnn-ablations NAME=RUN [NAME=RUN ...] --out DIR
 
 Writes ``DIR/figure10.png``, ``DIR/figure10.txt`` (the table) and ``DIR/figure10.json``.
 """
@@ -19,9 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from training.loop import read_metrics  # noqa: E402
+from training.loop import read_metrics
 
 
 def run_figures(run: Path) -> dict:
@@ -88,11 +86,11 @@ def plot(figures: dict[str, dict], path: Path) -> None:
     fig.savefig(path)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("runs", nargs="+", help="NAME=RUN_DIRECTORY")
     ap.add_argument("--out", type=Path, required=True)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     figures = {}
     for item in args.runs:
         name, sep, run = item.partition("=")
@@ -108,7 +106,3 @@ def main() -> None:
     (args.out / "figure10.txt").write_text(text + "\n")
     (args.out / "figure10.json").write_text(json.dumps(figures, indent=1, default=str))
     plot(figures, args.out / "figure10.png")
-
-
-if __name__ == "__main__":
-    main()

@@ -3,7 +3,7 @@ architecture, from this machine: no GPU needed. Each module is compiled for ``--
 (``wp.compile_aot_module``, into warp's kernel cache, where a later run on such a GPU finds it) and
 the cubin's ``.nv.info`` records are read with pyelftools.
 
-    python benchmarks/kernel_registers.py [--arch 90] [--modules datagen.sim.kernels,...]
+    python -m benchmarks kernel-registers [--arch 90] [--modules datagen.sim.kernels,...]
 
 A kernel's registers per thread decide how many of its threads an SM keeps in flight (H100/H200,
 sm_90: 65,536 registers and at most 2,048 threads per SM, warp's blocks of 256 threads); a stack
@@ -62,11 +62,11 @@ def cubin_kernels(data: bytes) -> dict[str, dict[int, int]]:
     return out
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--arch", type=int, default=90)
     ap.add_argument("--modules", default=",".join(MODULES))
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     import warp as wp
 
     wp.config.quiet = True
@@ -84,7 +84,3 @@ def main() -> None:
             print(f"# {name} ({path.parent.name})")
             for regs, frame, kernel in sorted(rows, reverse=True):
                 print(f"{regs:9d} {frame:7d} {resident_threads(regs):10d}  {kernel}")
-
-
-if __name__ == "__main__":
-    main()

@@ -1,7 +1,7 @@
 """Where paper 001's motion generator spends a training step: the data loader alone, one optimiser
 step alone (forward, backward, Adam; batch 20 in memory), and the two together, on one device.
 
-    python benchmarks/motion_train_speed.py STORE [--device cuda] [--steps 60] [--workers 2]
+    python -m benchmarks motion-train-speed STORE [--device cuda] [--steps 60] [--workers 2]
         [--modes eager,compile,graph]
 
 Prints segments/s of each, so that the training's own rate (``train_summary.json``) can be told
@@ -18,7 +18,7 @@ import time
 import torch
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("store")
     ap.add_argument("--device", default="cuda")
@@ -26,7 +26,7 @@ def main() -> None:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--batch", type=int, default=20)
     ap.add_argument("--modes", default="eager", help="comma-separated: eager, compile, graph")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     from datagen.store import open_store
     from training.motion.config import MotionConfig
     from training.motion.module import MotionModule
@@ -116,7 +116,3 @@ def main() -> None:
             n += len(b["label"])
         float(loss.detach())
         print(f"{mode}: loader + step: {n / (time.perf_counter() - t):8.1f} segments/s")
-
-
-if __name__ == "__main__":
-    main()

@@ -1,7 +1,7 @@
 """Contact sheet of sampled motions: per label, a film strip of a generated motion's skeleton beside
 a real motion of the same label, and how fast each moves.
 
-    python benchmarks/sampled_motion_sheet.py SAMPLES_DIR --store STORE --out sheet.png [--frames 6]
+    python -m benchmarks sampled-motion-sheet SAMPLES_DIR --store STORE --out sheet.png [--frames 6]
 
 ``SAMPLES_DIR`` holds one folder per label of ``drape sample motion`` output (``<label>/*.npz``, as
 ``benchmarks/paper_motion_gpu_run.sh PHASE=eval`` writes); the real motion is the procedural
@@ -34,7 +34,7 @@ def speed(joints: np.ndarray, fps: float) -> float:
     return float(np.linalg.norm(np.diff(local, axis=0), axis=-1).mean() * fps)
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("samples", type=Path)
     ap.add_argument("--store", required=True, help="a store whose body poses the skeletons")
@@ -90,7 +90,3 @@ def main(argv: list[str] | None = None) -> int:
     plt.close(fig)
     print(f"wrote {args.out}")
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

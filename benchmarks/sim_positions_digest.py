@@ -10,10 +10,11 @@ body (self-contact, body contact, projection, untangling) run through ``datagen.
 some with fewer frames than the tests so that all run in a few minutes on one CPU core. Every
 scene uses the production solver settings but for what its test changes.
 
-    python benchmarks/sim_positions_digest.py [--out digests.json] [--only NAME,NAME] [--skip-tshirt]
+    python -m benchmarks sim-positions-digest [--out digests.json] [--against before.json] [--only NAME,NAME] [--skip-tshirt]
 
 Prints one line per scene (name, frames, seconds, digests) and the JSON of {scene: {positions,
-velocities (the T-shirt: metrics), frames, vertices}}; ``--out`` writes that JSON too.
+velocities (the T-shirt: metrics), frames, vertices}}; ``--out`` writes that JSON too; ``--against``
+compares with an earlier run's JSON and exits 1 when a digest differs.
 """
 
 from __future__ import annotations
@@ -351,10 +352,11 @@ SCENES = {f.__name__: f for f in (
     fold_on_itself, fold_on_itself_20_substeps, band_on_cone, cusick, walking_tshirt)}
 
 
-def main(argv=None) -> dict:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="", help="write the digests as JSON here too")
     ap.add_argument("--only", default="", help="comma-separated scene names (default: all)")
+    ap.add_argument("--against", default="", help="an earlier run's JSON: print which scenes differ, exit 1 if any")
     ap.add_argument("--skip-tshirt", action="store_true", help="leave out the walking T-shirt (the slowest)")
     args = ap.parse_args(argv)
     import warp as wp
@@ -382,8 +384,16 @@ def main(argv=None) -> dict:
     if args.out:
         with open(args.out, "w") as fh:
             fh.write(text + "\n")
-    return out
+    if args.against:
+        with open(args.against) as fh:
+            before = json.load(fh)
+        differ = [n for n in out if n in before and before[n] != out[n]]
+        missing = [n for n in out if n not in before]
+        print(f"against {args.against}: {len(out) - len(differ) - len(missing)} of {len(out)} scenes bitwise equal"
+              + (f"; differ: {', '.join(differ)}" if differ else "") + (f"; not in it: {', '.join(missing)}" if missing else ""))
+        return 1 if differ else 0
+    return 0
 
 
 if __name__ == "__main__":
-    main()
+    raise SystemExit(main())

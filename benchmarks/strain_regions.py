@@ -2,8 +2,8 @@
 (largest principal strain against the rest mesh), their share per panel, per named opening (the
 faces touching the loop), on boundaries and seams, and the p99 of each saved frame.
 
-    python benchmarks/bench_sim.py run-scenes --inputs .simbench/runs.pkl --device cuda --out-dir DIR
-    python benchmarks/strain_regions.py .simbench/runs.pkl DIR
+    python -m benchmarks sim run-scenes --inputs .simbench/runs.pkl --device cuda --out-dir DIR
+    python -m benchmarks strain-regions .simbench/runs.pkl DIR
 """
 
 from __future__ import annotations
@@ -17,11 +17,11 @@ import numpy as np
 from datagen.sim.metrics import principal_strain
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("inputs", help="the prepared runs (bench_sim.py prepare-runs)")
+    ap.add_argument("inputs", help="the prepared runs (sim prepare-runs)")
     ap.add_argument("out_dir", help="the run's --out-dir (positions of every 10th recorded frame)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     with open(args.inputs, "rb") as fh:  # our own objects, from our own prepare step
         d = pickle.load(fh)
     for name, scene in zip(d["names"], d["scenes"]):
@@ -45,7 +45,3 @@ def main() -> None:
         print(f"{name}: p99 {100 * np.percentile(s, 99):.1f} %; above it: panels {panels}, openings {loops}, "
               f"seams {share(seam)} (of faces {seam.mean():.2f})")
         print("   p99 per saved frame %: " + " ".join(f"{100 * np.percentile(f, 99):.0f}" for f in s))
-
-
-if __name__ == "__main__":
-    main()

@@ -10,18 +10,18 @@ the distinct 32-byte sectors touched (a lower bound on what must come from memor
 stays in the L2 between launches). An estimate from the access pattern, not a hardware counter:
 Nsight Compute's figures are what decides.
 
-    python benchmarks/sweep_traffic.py --inputs .simbench/sim_inputs.npz \
+    python -m benchmarks sweep-traffic --inputs .simbench/sim_inputs.npz \
         --launch-us 64:95.4,256:290.6 --peak-tbs 4.8
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 from collections import defaultdict
-from pathlib import Path
 
 import numpy as np
+
+from benchmarks.common import prepared_batch
 
 SECTOR = 32
 """Bytes of one DRAM/L2 sector."""
@@ -84,20 +84,17 @@ def colour_traffic(h, colour: np.ndarray, parts: int) -> Traffic:
     return t
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--inputs", default=".simbench/sim_inputs.npz", help="bench_sim.py prepare's scene")
+    ap.add_argument("--inputs", default=".simbench/sim_inputs.npz", help="sim prepare's scene")
     ap.add_argument("--launch-us", default="64:95.4,256:290.6",
                     help="scenes:µs a launch, measured (default: an H200, self-collision off, bench_newton --profile)")
     ap.add_argument("--peak-tbs", type=float, default=4.8, help="the card's memory bandwidth [TB/s] (H200: 4.8)")
-    args = ap.parse_args()
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from bench_sim import _batch
-
+    args = ap.parse_args(argv)
     from datagen.sim.model import triangle_colours
     from datagen.sim.solver import SolverConfig
 
-    m = _batch(np.load(args.inputs), 1, "cpu", 0, SolverConfig())[0]
+    m = prepared_batch(np.load(args.inputs), 1, "cpu", 0, SolverConfig())[0].model
     h = m.host
     parts = m.body_part_count
     cols = [np.asarray(c, dtype=np.int64) for c in triangle_colours(h)]
@@ -120,7 +117,3 @@ def main() -> None:
         rb, ub = r * scenes / (us * 1e-6) / 1e12, u * scenes / (us * 1e-6) / 1e12
         print(f"{scenes} scenes at {us:g} µs a launch: requested {rb:.2f} TB/s, unique sectors {ub:.2f} TB/s "
               f"= {100 * ub / args.peak_tbs:.0f} % of the card's {args.peak_tbs:g} TB/s")
-
-
-if __name__ == "__main__":
-    main()

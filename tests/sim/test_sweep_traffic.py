@@ -3,15 +3,10 @@ counts taken another way (which triangles and edge stencils hold the vertex) on 
 
 from __future__ import annotations
 
-import sys
-from pathlib import Path
-
 import numpy as np
 
 from datagen.sim.model import ClothModelBuilder
 from tests.sim.meshes import grid
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
 OWN = 4 + 12 + 4 + 12 + 4 + 4 + 4 + 12 + 4 + 12  # active, x, mass, y, vt_count, damping, radius, centre, bound, x_prev
 """Bytes the kernel loads of a vertex's own arrays."""
@@ -27,7 +22,7 @@ def _host():
 
 
 def test_one_vertex_requested_bytes_match_its_triangles_and_stencils():
-    from sweep_traffic import colour_traffic
+    from benchmarks.sweep_traffic import colour_traffic
 
     h, parts = _host()
     faces, edges = np.asarray(h.faces), np.asarray(h.edges)
@@ -46,7 +41,7 @@ def test_one_vertex_requested_bytes_match_its_triangles_and_stencils():
 
 
 def test_a_colour_of_every_vertex_touches_every_position_sector():
-    from sweep_traffic import SECTOR, colour_traffic
+    from benchmarks.sweep_traffic import SECTOR, colour_traffic
 
     h, parts = _host()
     n = len(h.rest_positions)

@@ -322,8 +322,7 @@ def test_the_magnitude_head_learns_small_targets():
 
 
 def _grid_batch(*sizes):
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-    from bench_gnn import grid_frame
+    from benchmarks.gnn import grid_frame
     from torch_geometric.data import Batch
 
     return Batch.from_data_list([grid_frame(n, seed=k) for k, n in enumerate(sizes)])

@@ -1,6 +1,6 @@
 """drape's cloth solver and Newton's VBD cloth solver side by side, in one run, on the same scene.
 
-The scene is one of ``bench_sim.py prepare-runs``' (default: the T-shirt on the regular body
+The scene is one of ``sim prepare-runs``' (default: the T-shirt on the regular body
 walking, 30 fps), run as ``drape``'s pipeline runs it: settle at rest, lead-in from the rest pose,
 settle in the first pose, the 1 s ramp into the motion, then the motion (``frame_schedule`` in
 datagen/sim/scene.py). Both solvers get the same garment mesh, the same posed body mesh per frame
@@ -9,8 +9,8 @@ solver settings, 10 x 10 by default), the same
 contact distances and stiffnesses, and the same material; batches of N copies of the scene run in
 one model (drape: scenes; Newton: worlds).
 
-    python benchmarks/bench_sim.py prepare-runs --out runs.pkl --frames 300
-    python benchmarks/bench_newton.py --inputs runs.pkl --scene tshirt/walk --device cuda --batches 1,16
+    python -m benchmarks sim prepare-runs --out runs.pkl --frames 300
+    python -m benchmarks newton --inputs runs.pkl --scene tshirt/walk --device cuda --batches 1,16
 
 Printed per solver, batch size and self-collision on/off: ms per frame, garment-frames per second,
 and over every frame of scene 0 (measured by drape's metrics, the same code for both): frames with
@@ -42,18 +42,18 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import pickle
 import time
 
 import numpy as np
+
+from benchmarks.common import build_batch, load_runs
 
 
 def _load_scene(path: str, name: str) -> dict:
     """The garment and the body of every simulated frame (the pipeline's schedule) of one scene."""
     from datagen.sim.scene import RunConfig, body_at, frame_schedule, scene_arrays
 
-    with open(path, "rb") as fh:  # our own pickle of our own Scene objects (bench_sim.py prepare-runs)
-        runs = pickle.load(fh)
+    runs = load_runs(path)
     if name not in runs["names"]:
         raise SystemExit(f"scene {name!r} is not in {path}: it has {', '.join(runs['names'])}")
     cfg = RunConfig()
@@ -66,6 +66,13 @@ def _load_scene(path: str, name: str) -> dict:
             "body_vertices": frames.shape[1],
             "body": lambda f: body_at(frames, schedule[f]).astype(np.float32), "frame_count": len(schedule),
             "recorded_from": recorded_from}
+
+
+def _drape_batch(d, n: int, device, config):
+    """``n`` copies of the scene ``d`` (:func:`_load_scene`) at its first frame, drape's solver at ``config``."""
+    return build_batch(garment=d["garment"], faces=d["faces"], material=str(d["material"]), material_frames=d["frames"],
+                       body=d["body"](0), body_faces=d["body_faces"], body_face_part=d["body_face_part"], n=n,
+                       device=str(device), config=config)
 
 
 def _summary(frames: list[dict], recorded_from: int) -> dict:
@@ -95,18 +102,11 @@ class _Measure:
         import warp as wp
 
         from datagen.sim.metrics import Metrics
-        from datagen.sim.model import ClothModelBuilder
-        from datagen.sim.solver import SolverConfig, SolverVBD
-        from datagen.sim.state import BodyControl, ClothState
+        from datagen.sim.solver import SolverConfig
 
-        b = ClothModelBuilder()
-        b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=0, material_frames=d["frames"])
-        b.add_body(d["body"](0), d["body_faces"], scene=0, face_part=d["body_face_part"])
-        self.model = b.finalize(str(device))
-        self.solver = SolverVBD(self.model, SolverConfig())
+        one = _drape_batch(d, 1, device, SolverConfig())
+        self.model, self.solver, self.state, self.ctrl = one.model, one.solver, one.a, one.control
         self.metrics = Metrics(self.model)
-        self.state = ClothState.from_model(self.model)
-        self.ctrl = BodyControl.from_numpy(self.model, d["body"](0))
         self.wp = wp
 
     def __call__(self, positions: np.ndarray, velocities: np.ndarray, body: np.ndarray) -> dict:
@@ -146,20 +146,11 @@ def _profile(name: str, fn, device) -> None:
 def run_drape(d, n: int, self_col: bool, frames: int, device, measure: _Measure) -> dict:
     import warp as wp
 
-    from datagen.sim.model import ClothModelBuilder
-    from datagen.sim.solver import SolverConfig, SolverVBD
-    from datagen.sim.state import BodyControl, ClothState
+    from datagen.sim.solver import SolverConfig
 
     body = d["body"]
-    b = ClothModelBuilder()
-    for s in range(n):
-        b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s, material_frames=d["frames"])
-        b.add_body(body(0), d["body_faces"], scene=s, face_part=d["body_face_part"])
-    m = b.finalize(str(device))
-    solver = SolverVBD(m, SolverConfig(**{**DRAPE_OPTIONS, "self_contact.enabled": self_col}))
-    a, c = ClothState.from_model(m), ClothState.from_model(m)
-    ctrl = BodyControl.from_numpy(m, np.tile(body(0), (n, 1)))
-    solver.reset_body(ctrl)
+    batch = _drape_batch(d, n, device, SolverConfig(**{**DRAPE_OPTIONS, "self_contact.enabled": self_col}))
+    solver, a, c, ctrl = batch.solver, batch.a, batch.c, batch.control
     nv = len(d["garment"])
     rec, elapsed = [], 0.0
     for f in range(1, frames + 1):
@@ -446,10 +437,10 @@ graph on each of its first two (its two states alternate as input and output, on
 Newton's, with ``--newton-launch graph``, captures its frame graph on frame 2."""
 
 
-def main() -> None:
+def main(argv=None) -> None:
     global _lerp_body, PER_FRAME, PROFILE
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--inputs", default="runs.pkl", help="scenes from bench_sim.py prepare-runs")
+    ap.add_argument("--inputs", default="runs.pkl", help="scenes from sim prepare-runs")
     ap.add_argument("--scene", default="tshirt/walk", help="which of them")
     ap.add_argument("--device", default="cpu")
     ap.add_argument("--batches", default="1")
@@ -469,7 +460,7 @@ def main() -> None:
                     help="first check, on the CPU at 3 worlds, that the copied self-contact filters are Newton's own")
     ap.add_argument("--drape-option", action="append", default=[], metavar="KEY=VALUE",
                     help="a SolverConfig field for drape's solver (e.g. body_projection=false); repeatable")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     PER_FRAME = args.per_frame
     PROFILE = args.profile
     if not set(args.newton_launch.split(",")) <= {"python", "graph"}:
@@ -535,7 +526,3 @@ def _row(name: str, n: int, self_col: bool, r: dict) -> None:
           f"{r['garment_frames_per_s']:10.1f} {r['frames_with_penetration']:>4d}/{r['recorded']:<5d} "
           f"{r['max_penetrating_vertices']:9d} {r['max_depth_mm']:8.2f} {r['max_self_intersections']:6d} "
           f"{r['max_stretch']:8.3f} {'yes' if r['nan'] else 'no':>4}", flush=True)
-
-
-if __name__ == "__main__":
-    main()

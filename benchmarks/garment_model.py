@@ -3,7 +3,7 @@ learned BOS MLP 1024/4096): parameters and the time to predict a garment sequenc
 decoding (T = 60 frames, each predicted frame fed back), per frame, on the CPU or a GPU. No store
 needed: the weights are untrained (speed does not depend on them) and the poses random.
 
-    python benchmarks/bench_garment.py [--device cpu|cuda] [--vertices 2950 3274] [--batch 1 8]
+    python -m benchmarks garment-model [--device cpu|cuda] [--vertices 2950 3274] [--batch 1 8]
 
 On CUDA each size is timed launched step by step and replayed as one captured CUDA graph
 (``GarmentRegressor.generate(graph=True)``, what ``drape evaluate`` and ``drape sample clothed`` use).
@@ -16,13 +16,9 @@ self-collision on an H200).
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import torch
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def main(argv=None) -> int:
@@ -64,7 +60,3 @@ def main(argv=None) -> int:
                 print(f"{v:8d} {params:10,d} {params * 4 / 2**20:6.1f} {b:5d} {'on' if graph else 'off':>5} "
                       f"{1000 * seq:12.1f} {1000 * per_frame:9.3f} {1 / per_frame:9.0f}", flush=True)
     return 0
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -4,24 +4,20 @@ The loader of ``drape train gnn`` (``training.gnn.run._loader``: torch_geometric
 :class:`~training.data.FrameDataset`, spawned workers that open the store and derive the features)
 against a DataLoader over the same frames built beforehand and kept as ``Data`` objects (only
 batching left). Figures are frames per second over whole passes, after one warm-up pass (which
-starts the workers). If the first is well above a training step's rate (``bench_gnn.py``: 110-186
+starts the workers). If the first is well above a training step's rate (``gnn``: 110-186
 frames/s on an H200), the loader is not what limits training.
 
-    python benchmarks/bench_gnn_loader.py STORE [--frames 240] [--workers 0,2,4] [--batch 8]
+    python -m benchmarks gnn-loader STORE [--frames 240] [--workers 0,2,4] [--batch 8]
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from training.config import TrainConfig  # noqa: E402
-from training.data import FrameDataset  # noqa: E402
-from training.gnn.run import _loader  # noqa: E402
+from training.config import TrainConfig
+from training.data import FrameDataset
+from training.gnn.run import _loader
 
 
 def rate(loader, passes: int) -> float:
@@ -35,14 +31,14 @@ def rate(loader, passes: int) -> float:
     return n / (time.perf_counter() - t0)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("store")
     ap.add_argument("--frames", type=int, default=240, help="training frames drawn (seeded) for the pass")
     ap.add_argument("--workers", default="0,2", help="DataLoader worker counts to measure, comma-separated")
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--passes", type=int, default=2)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     ds = FrameDataset(args.store, "train", max_frames=args.frames)
     t0 = time.perf_counter()
     memory = [ds[k] for k in range(len(ds))]
@@ -57,7 +53,3 @@ def main() -> None:
         in_memory = rate(_loader(memory, config, shuffle=True, accelerator="cpu"), args.passes)
         print(f"workers {w}: from the store {from_store:8.1f} frames/s | in memory {in_memory:8.1f} frames/s | "
               f"ratio {from_store / in_memory:.2f}")
-
-
-if __name__ == "__main__":
-    main()

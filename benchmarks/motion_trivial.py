@@ -1,6 +1,6 @@
 """Table 4 for two trivial generators, the baselines beside paper 001's generation figures.
 
-    python benchmarks/motion_trivial_generators.py STORE [--split test] [--repetitions 20]
+    python -m benchmarks motion-trivial STORE [--split test] [--repetitions 20]
 
 No model is trained: with `drape evaluate`'s protocol (the same GRU recogniser, trained with seed 0 on
 the train split's labelled segments; sets as large as the split, drawn ``--repetitions`` times) it
@@ -16,12 +16,11 @@ bitwise those of a GPU evaluation: compare with the real row printed in the same
 from __future__ import annotations
 
 import argparse
-import sys
 
 import torch
 
 
-def main(argv: list[str] | None = None) -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("store")
     ap.add_argument("--split", default="test")
@@ -69,7 +68,3 @@ def main(argv: list[str] | None = None) -> int:
                  for k in ("fid", "accuracy", "diversity", "multimodality", "speed")]
         print(f"{name:32s} " + " ".join(f"{c:>16s}" for c in cells))
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

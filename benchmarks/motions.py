@@ -1,6 +1,6 @@
 """Procedural motions: per-label quality over many seeds, generation speed, and label separability.
 
-    python benchmarks/bench_motions.py --seeds 50 --frames 90
+    python -m benchmarks motions --seeds 50 --frames 90
 
 Prints, per label (means over seeds unless marked): share of checked frames with limb-torso
 interpenetration and how many sequences the filter drops (with its defaults: any interpenetration,
@@ -16,13 +16,9 @@ each sequence, tested on the second) to show that seeds give distinct sequences.
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from datagen.body.cache import default_body
 from datagen.motion.labels import LABELS
@@ -43,13 +39,13 @@ def window_features(motion, window: int = 15, hop: int = 5) -> np.ndarray:
     return np.asarray(out)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seeds", type=int, default=50)
     ap.add_argument("--frames", type=int, default=90)
     ap.add_argument("--stride", type=int, default=3, help="check interpenetration every this many frames")
     ap.add_argument("--labels", default=",".join(LABELS))
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     labels = args.labels.split(",")
     body = default_body()
     probe = BodyProbe(body)
@@ -116,7 +112,3 @@ def main() -> None:
         seed_accs.append(c.score(np.concatenate(Xb), yb))
     print(f"seed among {k} of one label, first half -> second half of each sequence: mean accuracy "
           f"{np.mean(seed_accs):.1%} (chance {1 / k:.0%}); min {min(seed_accs):.1%} ({labels[int(np.argmin(seed_accs))]})")
-
-
-if __name__ == "__main__":
-    main()

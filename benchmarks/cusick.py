@@ -7,7 +7,7 @@ DC = (S - S_support) / (S_specimen - S_support); nodes are the folds around the 
 of the shadow's radius over the angle). The support is a cylinder whose top rim is rounded by 5 mm
 (a sharp rim is an edge of zero radius, which a penalty contact cannot hold cloth on).
 
-    python benchmarks/bench_cusick.py [--presets cotton,denim] [--edge 0.015] [--seconds 3] [--picture docs/cusick.png]
+    python -m benchmarks cusick [--presets cotton,denim] [--edge 0.015] [--seconds 3] [--picture docs/cusick.png]
 
 Prints per preset: DC, nodes, the published range it is checked against, and whether it settled
 (the largest vertex speed in the last frame).
@@ -129,7 +129,7 @@ def drape(mat, edge: float, seconds: float, config: SolverConfig):
     return x.astype(np.float64), f, float(np.linalg.norm(vel, axis=1).max())
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--presets", default=",".join(MATERIALS))
     ap.add_argument("--edge", type=float, default=0.015, help="edge length of the disc mesh [m] (garments: 1.3-2 cm)")
@@ -137,7 +137,7 @@ def main() -> None:
     ap.add_argument("--variant", default="", help="SolverConfig KEY=VALUE[,KEY=VALUE] for this run")
     ap.add_argument("--material", default="", help="Material KEY=VALUE[,...] applied to every preset (a sweep)")
     ap.add_argument("--picture", default="", help="write the settled shapes as a PNG")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
 
     def kv(spec, base):
         kw = {}
@@ -192,7 +192,3 @@ def main() -> None:
         fig.tight_layout()
         fig.savefig(args.picture, dpi=90)
         print(f"wrote {args.picture}")
-
-
-if __name__ == "__main__":
-    main()

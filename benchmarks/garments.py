@@ -1,6 +1,6 @@
 """Garments over many seeds and bodies: vertex counts, build time, mesh quality, check failures.
 
-    python benchmarks/bench_garments.py --seeds 10 --bodies thin,regular,fat [--types all] [--jobs 2]
+    python -m benchmarks garments --seeds 10 --bodies thin,regular,fat [--types all] [--jobs 2]
 
 Per type: vertex count range, mean build time per garment (construction only; checks excluded),
 the worst minimum angle and its 1st percentile, edge-length spread, minimum clearance, the
@@ -16,11 +16,8 @@ import multiprocessing as mp
 import sys
 import time
 from collections import Counter, defaultdict
-from pathlib import Path
 
 import numpy as np
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from datagen.garment.types import GARMENT_TYPES
 
@@ -63,14 +60,14 @@ def _short(failure: str) -> str:
     return failure
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--seeds", type=int, default=10)
     ap.add_argument("--bodies", default="thin,regular,fat")
     ap.add_argument("--types", default="all", help="comma-separated types, or 'all'")
     ap.add_argument("--edge-length", type=float, default=None, help="default: each type's own")
     ap.add_argument("--jobs", type=int, default=1, help="worker processes")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     from tqdm import tqdm
 
     kinds = list(GARMENT_TYPES) if args.types == "all" else args.types.split(",")
@@ -123,7 +120,3 @@ def main() -> None:
             if "error" in r or not r["ok"]:
                 what = r["error"] if "error" in r else "; ".join(r["failures"])
                 print(f"  failed: {kind} body={r.get('body')} seed={r.get('seed')}: {what}")
-
-
-if __name__ == "__main__":
-    main()

@@ -1,13 +1,18 @@
-"""Cloth simulator throughput: one T-shirt on the regular body walking, and batches of such scenes.
+"""Cloth simulator throughput: one T-shirt on the regular body walking, and batches of such scenes;
+and the long-run check scenes (the six 300-frame runs).
 
 Two steps, so the GPU host needs only numpy and warp:
 
-    python benchmarks/bench_sim.py prepare --out sim_inputs.npz      # here: garment, body frames
-    python benchmarks/bench_sim.py run --inputs sim_inputs.npz --device cuda --batches 1,16,64,256
+    python -m benchmarks sim prepare --out sim_inputs.npz      # here: garment, body frames
+    python -m benchmarks sim run --inputs sim_inputs.npz --device cuda --batches 1,16,64,256
+    python -m benchmarks sim profile --inputs sim_inputs.npz --device cuda --batches 64,256
+    python -m benchmarks sim prepare-runs --out runs.pkl --frames 300   # garments x motions
+    python -m benchmarks sim run-scenes --inputs runs.pkl --device cuda [--out-dir DIR]
 
 ``run`` prints, per batch size and with self-collision on and off: ms per frame, garment-frames
 per second, device memory per scene, and the metrics (penetrating vertices, self-intersections,
-max stretch) of the last frame of scene 0.
+max stretch) of the last frame of scene 0. ``profile``: each kernel's and each phase's ms per frame.
+``run-scenes``: per scene its summary (failure, crossings, penetration, strain) as JSON.
 """
 
 from __future__ import annotations
@@ -19,6 +24,8 @@ import pickle
 import time
 
 import numpy as np
+
+from benchmarks.common import load_runs, play, prepared_batch, run_output, scene_name, solver_settings
 
 
 def prepare(args) -> None:
@@ -42,51 +49,17 @@ def prepare(args) -> None:
           f"frames of {args.motion}")
 
 
-def _scene_name(d) -> str:
-    """``garment/motion`` of prepared inputs (those prepared before the names were kept: the T-shirt walking)."""
-    return f"{d['kind'] if 'kind' in d else 'tshirt'}/{d['motion'] if 'motion' in d else 'walk'}"
-
-
-def _batch(d, n: int, device: str, frames: int, config):
-    """``n`` copies of the prepared scene (the T-shirt walking unless prepared otherwise) as one
-    model: (model, solver, metrics, state a, state c, control, the body's frames tiled per scene)."""
-    from datagen.sim.metrics import Metrics
-    from datagen.sim.model import ClothModelBuilder
-    from datagen.sim.solver import SolverVBD
-    from datagen.sim.state import BodyControl, ClothState
-
-    body = d["body"]
-    b = ClothModelBuilder()
-    for s in range(n):
-        b.add_cloth(d["garment"], d["faces"], material_name=str(d["material"]), scene=s, material_frames=d["frames"])
-        b.add_body(body[0], d["body_faces"], scene=s, face_part=d["body_face_part"] if "body_face_part" in d else None)
-    m = b.finalize(device)
-    solver = SolverVBD(m, config)
-    a, c = ClothState.from_model(m), ClothState.from_model(m)
-    ctrl = BodyControl.from_numpy(m, np.tile(body[0], (n, 1)))
-    solver.reset_body(ctrl)
-    return m, solver, Metrics(m), a, c, ctrl, [np.tile(f, (n, 1)) for f in body[:frames + 1]]
-
-
-def _play(solver, a, c, ctrl, frames):
-    """Step once per body frame of ``frames`` (a -> c, then c -> a, ...); the states, latest first."""
-    for f in frames:
-        ctrl.set(f)
-        solver.step(a, c, ctrl, 1 / 30)
-        a, c = c, a
-    return a, c
-
-
 def run(args) -> None:
     import warp as wp
 
+    from datagen.sim.metrics import Metrics
     from datagen.sim.solver import SolverConfig
 
     d = np.load(args.inputs)
     body = d["body"]
     wp.init()
     dev = wp.get_device(args.device)
-    print(f"device {dev} ({dev.name}); {_scene_name(d)} {len(d['garment'])} vertices, {len(d['faces'])} faces; body "
+    print(f"device {dev} ({dev.name}); {scene_name(d)} {len(d['garment'])} vertices, {len(d['faces'])} faces; body "
           f"{body.shape[1]} vertices; {min(args.frames, len(body) - 1)} timed frames at 30 fps, {SolverConfig().substeps} substeps x "
           f"{SolverConfig().iterations} iterations")
     print(f"{'batch':>5} {'self':>5} {'graph':>5} {'ms/frame':>9} {'garment-frames/s':>17} {'MB/scene':>9} {'pen':>5} {'self-x':>6} "
@@ -97,15 +70,17 @@ def run(args) -> None:
                                for b in args.batches.split(",")]:
         wp.synchronize()
         mem0 = wp.get_mempool_used_mem_current(dev) if dev.is_cuda else 0
-        m, solver, metrics, a, c, ctrl, frames = _batch(d, n, str(dev), args.frames,
-                                                         SolverConfig(**{**_settings(args.set), "self_collision": self_col,
-                                                                         "cuda_graph": graph}))
+        batch, frames = prepared_batch(d, n, str(dev), args.frames,
+                                       SolverConfig(**{**solver_settings(args.set), "self_collision": self_col,
+                                                       "cuda_graph": graph}))
+        m, solver, a, c, ctrl = batch.model, batch.solver, batch.a, batch.c, batch.control
+        metrics = Metrics(m)
         for _ in range(2):  # warm-up: compiles kernels, captures the two graphs (a -> c, c -> a)
             solver.step(a, c, ctrl, 1 / 30)
             a, c = c, a
         wp.synchronize()
         t = time.perf_counter()
-        a, c = _play(solver, a, c, ctrl, frames[1:])
+        a, c = play(solver, a, c, ctrl, frames[1:])
         wp.synchronize()
         dt = (time.perf_counter() - t) / (len(frames) - 1)
         mem = (wp.get_mempool_used_mem_current(dev) - mem0) / n / 2**20 if dev.is_cuda else float("nan")
@@ -115,19 +90,9 @@ def run(args) -> None:
               flush=True)
         # free this batch's device memory now, not while the next batch is being measured (its
         # MB/scene read -4,586 when the 256-scene batch's pool was released inside the next one's)
-        del m, solver, metrics, a, c, ctrl, frames
+        del batch, m, solver, metrics, a, c, ctrl, frames
         gc.collect()
         wp.synchronize()
-
-
-def _settings(items: list[str]) -> dict:
-    """``KEY=VALUE`` items as ``SolverConfig`` keyword arguments (checked by drape's config loader)."""
-    from datagen.config import load_config, parse_assignments
-    from datagen.sim.solver import SolverConfig
-
-    kw = parse_assignments(items)
-    load_config(SolverConfig, kw)
-    return kw
 
 
 PHASES = {  # kernel (or native call) -> phase of a substep (the first key found in its name)
@@ -175,22 +140,23 @@ def profile(args) -> None:
     wp.init()
     dev = wp.get_device(args.device)
     on_off = {"on": True, "off": False}
-    kw = _settings(args.set)
-    print(f"device {dev} ({dev.name}); {_scene_name(d)} {len(d['garment'])} vertices; {args.frames} profiled frames; "
+    kw = solver_settings(args.set)
+    print(f"device {dev} ({dev.name}); {scene_name(d)} {len(d['garment'])} vertices; {args.frames} profiled frames; "
           f"{SolverConfig(**kw)}")
     for self_col, n in [(on_off[sc], int(b)) for sc in args.self.split(",") for b in args.batches.split(",")]:
         launched = SolverConfig(self_collision=self_col, cuda_graph=False, **kw)
-        m, solver, _metrics, a, c, ctrl, frames = _batch(d, n, str(dev), args.frames + 2, launched)
+        batch, frames = prepared_batch(d, n, str(dev), args.frames + 2, launched)
+        m, solver, a, c, ctrl = batch.model, batch.solver, batch.a, batch.c, batch.control
         graph_ms = float("nan")
         for _ in range(2):
             solver.step(a, c, ctrl, 1 / 30)
             a, c = c, a
         if dev.is_cuda:  # the rate as the pipeline runs it: replayed graphs
             solver.config = dataclasses.replace(launched, cuda_graph=True)
-            a, c = _play(solver, a, c, ctrl, frames[1:3])
+            a, c = play(solver, a, c, ctrl, frames[1:3])
             wp.synchronize()
             t = time.perf_counter()
-            a, c = _play(solver, a, c, ctrl, frames[3:])
+            a, c = play(solver, a, c, ctrl, frames[3:])
             wp.synchronize()
             graph_ms = 1000 * (time.perf_counter() - t) / (len(frames) - 3)
             solver.config = launched
@@ -200,7 +166,7 @@ def profile(args) -> None:
         if dev.is_cuda:
             wp.timing_begin(cuda_filter=wp.TIMING_KERNEL | wp.TIMING_KERNEL_BUILTIN | wp.TIMING_MEMCPY
                             | wp.TIMING_MEMSET)
-            a, c = _play(solver, a, c, ctrl, frames[3:])
+            a, c = play(solver, a, c, ctrl, frames[3:])
             for r in wp.timing_end():
                 times.setdefault(r.name, []).append(r.elapsed)
         else:
@@ -217,7 +183,7 @@ def profile(args) -> None:
             wp.Mesh.refit = timed(lambda *_: "mesh_refit (native)", mesh_refit)
             wp.Bvh.refit = timed(lambda *_: "bvh_refit (native)", bvh_refit)
             try:
-                a, c = _play(solver, a, c, ctrl, frames[3:])
+                a, c = play(solver, a, c, ctrl, frames[3:])
             finally:
                 wp.launch, wp.Mesh.refit, wp.Bvh.refit = launch, mesh_refit, bvh_refit
         wp.synchronize()
@@ -236,7 +202,7 @@ def profile(args) -> None:
         for name, v in sorted(times.items(), key=lambda kv: -sum(kv[1]))[:args.top]:
             ms = sum(v) / nf
             print(f"  {name[:44]:<44} {len(v) / nf:14.0f} {ms:9.2f} {100 * ms / total:5.1f}% {1000 * ms / (len(v) / nf):9.1f}")
-        del m, solver, a, c, ctrl, frames
+        del batch, m, solver, a, c, ctrl, frames
         gc.collect()
         wp.synchronize()
 
@@ -274,8 +240,7 @@ def run_scenes(args) -> None:
     from datagen.sim.scene import RunConfig, simulate
     from datagen.sim.solver import SolverConfig
 
-    with open(args.inputs, "rb") as fh:
-        d = pickle.load(fh)
+    d = load_runs(args.inputs)
     scenes, names = d["scenes"], d["names"]
     if args.material:
         import dataclasses
@@ -295,7 +260,7 @@ def run_scenes(args) -> None:
                                               {"friction_pressure": args.friction_pressure}),
                                            **({} if args.global_iterations is None else
                                               {"global_iterations": args.global_iterations}),
-                                           **_settings(args.set)))
+                                           **solver_settings(args.set)))
     print(f"{len(scenes)} scenes in one batch, device {args.device}, {config}", flush=True)
     t0 = time.perf_counter()
 
@@ -321,12 +286,12 @@ def run_scenes(args) -> None:
                        strain_max=float(strain.max()), material=scene.garment.material.name)
         print(f"{name}: {json.dumps(summary)}")
         if out:
-            np.savez_compressed(out / f"{name.replace('/', '_')}.npz",
+            np.savez_compressed(run_output(out, name),
                                 **{f"metric_{k}": v for k, v in r.metrics.items()}, recorded_from=r.recorded_from,
                                 positions=r.positions[::10], body=r.body_vertices[::10])
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest="cmd", required=True)
     p = sub.add_parser("prepare")
@@ -383,9 +348,5 @@ def main() -> None:
     p.add_argument("--material", action="append", default=[], metavar="KEY=VALUE",
                    help="a Material field set on every scene's garment (repeatable; a sweep)")
     p.set_defaults(func=run_scenes)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     args.func(args)
-
-
-if __name__ == "__main__":
-    main()

@@ -7,7 +7,7 @@ reader, the same function as on read) and compressed as schema 3 did (blosc lz4 
 256 KiB chunks), per garment-frame. Per-vertex and per-frame parts are also scaled to a
 ``--vertices``-vertex garment (the issue's figure is for ~4,000).
 
-    python benchmarks/bench_store_size.py STORE [--samples 8] [--vertices 4000] [--codecs]
+    python -m benchmarks store-size STORE [--samples 8] [--vertices 4000] [--codecs]
 
 ``--codecs`` also compresses ``detail`` of the first samples in the candidate encodings (float32
 metres; int16/int32 steps of the quantum from the anchor or from the root joint) with the
@@ -18,16 +18,13 @@ behind ``schemas.dataset.POSITION_COMPRESSION``.
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from datagen.store import open_store  # noqa: E402
-from datagen.store.layout import directory_bytes  # noqa: E402
-from schemas.dataset import ARRAYS  # noqa: E402
+from datagen.store import open_store
+from datagen.store.layout import directory_bytes
+from schemas.dataset import ARRAYS
 
 V3_PER_VERTEX = ("detail", "coarse", "anchor", "anchor_normal", "anchor_skin", "coarse_normal", "skin",
                  "joint_distance")
@@ -80,13 +77,13 @@ def codec_table(s, samples: list[int]) -> None:
         print(row)
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("store", type=Path)
     ap.add_argument("--samples", type=int, default=8, help="samples to rebuild schema 3's arrays from")
     ap.add_argument("--vertices", type=int, default=4000, help="garment size to scale the figures to")
     ap.add_argument("--codecs", action="store_true", help="also compare position encodings and codecs")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     s = open_store(args.store, backend="zarr")
     idx = s.index
     T = np.diff(idx["frame_start"])
@@ -138,7 +135,3 @@ def main() -> None:
           f"{before_scaled / 1024:.1f} KiB -> {after_scaled / 1024:.1f} KiB")
     if args.codecs:
         codec_table(s, ok[:3])
-
-
-if __name__ == "__main__":
-    main()

@@ -9,8 +9,8 @@ pass over the train split. Figures are samples (or segments, frames) per second 
 array bytes. The store's files are usually in the OS page cache (a just-built store always is):
 this measures decoding and library overhead, not the disk.
 
-    python benchmarks/bench_store_read.py STORE [--reads 200] [--backends zarr,tensorstore]
-    python benchmarks/bench_store_read.py --synthetic 16 [--vertices 4000 --frames 60 --body-vertices 6890] [--out DIR]
+    python -m benchmarks store-read STORE [--reads 200] [--backends zarr,tensorstore]
+    python -m benchmarks store-read --synthetic 16 [--vertices 4000 --frames 60 --body-vertices 6890] [--out DIR]
 
 ``--synthetic N`` builds (with the real writer and packer) a store of N samples of smooth random
 motion at the given sizes, reports staging and packing speed, then benchmarks it.
@@ -20,18 +20,15 @@ from __future__ import annotations
 
 import argparse
 import shutil
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from datagen.store import StoreWriter, open_store, store_info  # noqa: E402
-from datagen.store.layout import directory_bytes  # noqa: E402
-from schemas.dataset import ARRAYS  # noqa: E402
+from datagen.store import StoreWriter, open_store, store_info
+from datagen.store.layout import directory_bytes
+from schemas.dataset import ARRAYS
 
 MB = 1e6
 PAPER_000_FRAME = ["detail", "coarse", "anchor", "anchor_normal", "anchor_skin", "coarse_normal", "skin",
@@ -182,7 +179,7 @@ def measure_passes(store, min_seconds: float) -> tuple[float, float, int]:
             return done / elapsed, nbytes / MB / elapsed, done
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("store", nargs="?", type=Path, help="a packed store (or where --synthetic builds one)")
     ap.add_argument("--synthetic", type=int, metavar="N", help="build a synthetic store of N samples first")
@@ -194,7 +191,7 @@ def main() -> None:
     ap.add_argument("--backends", default=None,
                     help="comma-separated: zarr, tensorstore (default: both, or zarr without tensorstore installed)")
     ap.add_argument("--keep", action="store_true", help="keep a synthetic store built in a temporary directory")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     if args.backends is None:
         try:
             import tensorstore  # noqa: F401
@@ -263,7 +260,3 @@ def run(args) -> None:
             print(f"{label if k == 0 else '':<19}{name:<13}{r[0]:>10.1f}{r[1]:>9.0f}{mem[0]:>16.1f}{mem[1]:>13.0f}"
                   f"{mem[0] / r[0]:>13.1f}x")
     print("(items: samples, segments or frames as the access names them; MB: decoded array bytes, 1e6 B)")
-
-
-if __name__ == "__main__":
-    main()

@@ -3,7 +3,7 @@ material preset, pinned along its top edge, no air drag, self-collision off: its
 against the closed-form static answer, how much it still oscillates, and the mechanical energy
 balance (kinetic + elastic - work of gravity), which with a static support can only fall.
 
-    python benchmarks/bench_convergence.py [--presets cotton,denim] [--seconds 2.5] [--variant KEY=VALUE ...]
+    python -m benchmarks convergence [--presets cotton,denim] [--seconds 2.5] [--variant KEY=VALUE ...]
 
 ``--variant`` sets a SolverConfig field (e.g. ``chebyshev_rho=0``, ``iterations=50``) for a side run.
 Prints one row per preset and variant, with whether it meets the physics test's criteria
@@ -136,7 +136,7 @@ def stvk_elongation(k: float, rho: float, length: float) -> float:
     return float(np.trapezoid(np.array(lam) - 1.0, s))
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--presets", default=",".join(MATERIALS))
     ap.add_argument("--seconds", type=float, default=2.5)
@@ -151,7 +151,7 @@ def main() -> None:
                     "pipeline's settling, lead-in and ramp; the median and max are over the moving substeps")
     ap.add_argument("--motion", default="walk")
     ap.add_argument("--frames", type=int, default=10)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     base = SolverConfig(self_collision=False, air_drag=0.0)
     variants = [("production", base)]
     for spec in args.variant:
@@ -193,7 +193,3 @@ def main() -> None:
             print(f"{name:<10} {label:<28} {exact * 1e3:9.4f} {last.mean() * 1e3:9.4f} "
                   f"{100 * err:+8.1f} {100 * osc / exact:14.1f} {en.max() * 1e6:+10.3f} "
                   f"{work * 1e6:8.2f} {'pass' if ok else 'FAIL':>5} {time.perf_counter() - t0:6.1f}", flush=True)
-
-
-if __name__ == "__main__":
-    main()

@@ -8,22 +8,18 @@ CUDA graph (``GNNModule.captured_predictor``). Training throughput is frames per
 at ``--batch`` frames per step. Paper 000: W_coarse 18.4 MB, W_detail + W_parser 19 MB, 21 ms per
 frame on an RTX 2080 Ti.
 
-    python benchmarks/bench_gnn.py [--vertices 3500] [--batch 8] [--device cpu|cuda] [--ablation full] [--compile]
+    python -m benchmarks gnn [--vertices 3500] [--batch 8] [--device cpu|cuda] [--ablation full] [--compile]
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import torch
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from training.config import TrainConfig  # noqa: E402
-from training.gnn.module import GNNModule  # noqa: E402
+from training.config import TrainConfig
+from training.gnn.module import GNNModule
 
 
 def grid_frame(vertices: int, seed: int = 0):
@@ -88,7 +84,7 @@ def compiled_one_frame(module, one, per_frame, dev, tf32: bool = False, mode: st
           f"{seconds:.0f} s; largest difference to eager {diff:.2e} m)")
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--vertices", type=int, default=3500)
     ap.add_argument("--batch", type=int, default=8)
@@ -102,7 +98,7 @@ def main() -> None:
     ap.add_argument("--compile-only", action="store_true", help="with --compile: only the compiled rows")
     ap.add_argument("--max-autotune", action="store_true",
                     help="with --compile: also a row compiled in inductor's max-autotune mode (float32 matmuls)")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     from torch_geometric.data import Batch
 
     dev = torch.device(args.device)
@@ -180,7 +176,3 @@ def main() -> None:
                 compiled_one_frame(module, one, per_frame, dev, mode="max-autotune")
             if args.tf32:
                 compiled_one_frame(module, one, per_frame, dev, tf32=True)
-
-
-if __name__ == "__main__":
-    main()

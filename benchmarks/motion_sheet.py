@@ -1,6 +1,6 @@
 """Render a contact sheet of the procedural motions on the default body (docs/motions.png).
 
-    python benchmarks/motion_contact_sheet.py --out docs/motions.png --seed 1
+    python -m benchmarks motion-sheet --out docs/motions.png --seed 1
 
 One row per label: frames spread over 3 s, each seen from the front and from the side (the
 body faces +Z; the red line is the ground).
@@ -9,24 +9,21 @@ body faces +Z; the red line is the ground).
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from datagen.body.cache import default_body  # noqa: E402
-from datagen.motion.labels import LABELS  # noqa: E402
-from datagen.motion.library import make_motion  # noqa: E402
+from datagen.body.cache import default_body
+from datagen.motion.labels import LABELS
+from datagen.motion.library import make_motion
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default="docs/motions.png")
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--frames-shown", type=int, default=4)
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     import matplotlib
 
     matplotlib.use("Agg")
@@ -56,7 +53,3 @@ def main() -> None:
     Path(args.out).parent.mkdir(parents=True, exist_ok=True)
     plt.savefig(args.out, dpi=110)
     print(f"wrote {args.out}")
-
-
-if __name__ == "__main__":
-    main()

@@ -3,19 +3,15 @@
 body's 13,348 vertices) and a training step's time, on the CPU or a GPU. No store needed: the
 body is drape's default body and the weights are untrained (speed does not depend on them).
 
-    python benchmarks/bench_motion.py [--device cpu|cuda] [--batch 1 8 64] [--repeat 5]
+    python -m benchmarks motion-model [--device cpu|cuda] [--batch 1 8 64] [--repeat 5]
 """
 
 from __future__ import annotations
 
 import argparse
-import sys
 import time
-from pathlib import Path
 
 import torch
-
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def main(argv=None) -> int:
@@ -78,7 +74,3 @@ def main(argv=None) -> int:
     print(f"  training step, batch {b} (the paper's), vertex loss on all {body.v_template.shape[0]:,} vertices: "
           f"{min(times) * 1000:.0f} ms ({b / min(times):.1f} segments/s)")
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())

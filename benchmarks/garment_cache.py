@@ -2,7 +2,7 @@
 nothing else: for a GPU host without pymeshlab or anny, which then finds them there
 (``DRAPE_CACHE_DIR``; carry the directory) and only simulates.
 
-    DRAPE_CACHE_DIR=.gpucache_gnn python benchmarks/build_garment_cache.py --preset paper-gnn [--workers 2]
+    DRAPE_CACHE_DIR=.gpucache_gnn python -m benchmarks garment-cache --preset paper-gnn [--workers 2]
 
 Each instance is built by the same call ``drape generate`` makes (``Plan.garment``), so the cache
 keys are the ones it looks up. Prints each instance as it is done and the cache's size."""
@@ -36,12 +36,12 @@ def _build(g: int) -> tuple[int, float]:
     return g, time.perf_counter() - t
 
 
-def main() -> None:
+def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--preset", default="paper-gnn")
     ap.add_argument("--config", default=None, help="a dataset config file instead of a preset")
     ap.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2)))
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     plan = _plan(args.preset, args.config)
     n = len(plan.instances)
     print(f"{n} garment instances on {len(plan.bodies)} bodies; cache {os.environ.get('DRAPE_CACHE_DIR', '(default)')}",
@@ -56,7 +56,3 @@ def main() -> None:
     root = Path(os.environ.get("DRAPE_CACHE_DIR", Path.home() / ".cache" / "drape"))
     size = sum(p.stat().st_size for p in root.rglob("*") if p.is_file()) if root.exists() else 0
     print(f"done in {time.perf_counter() - t0:.0f} s; {root}: {size / 2**20:.1f} MB")
-
-
-if __name__ == "__main__":
-    main()

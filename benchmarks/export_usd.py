@@ -11,23 +11,20 @@ write (normals included, array preparation excluded), MB on disk, frames per sec
 validate, the validators' error count, and whether every frame's points read back equal to the
 float32 input.
 
-    python benchmarks/bench_export.py [--frames 300] [--garment-vertices 16652] [--out DIR] [--keep]
+    python -m benchmarks export [--frames 300] [--garment-vertices 16652] [--out DIR] [--keep]
 """
 
 from __future__ import annotations
 
 import argparse
 import shutil
-import sys
 import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-
-from datagen.export.usd import SkeletonAnimation, usd_validation_errors, write_animation_usd  # noqa: E402
+from datagen.export.usd import SkeletonAnimation, usd_validation_errors, write_animation_usd
 
 
 def tube(vertex_count: int, radius: float = 0.2, height: float = 0.45, rows: int = 46):
@@ -80,13 +77,13 @@ def read_back_exact(path: Path, body: np.ndarray, garment: np.ndarray, skinned: 
     return True
 
 
-def main() -> int:
+def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--frames", type=int, default=300)
     ap.add_argument("--garment-vertices", type=int, default=16652, help="rounded down to a multiple of 46")
     ap.add_argument("--out", type=Path, default=None, help="directory for the files (default: a temporary one)")
     ap.add_argument("--keep", action="store_true", help="keep the files")
-    args = ap.parse_args()
+    args = ap.parse_args(argv)
     t0 = time.perf_counter()
     model, body, garment, faces, region, sk = make_animation(args.frames, args.garment_vertices)
     T, B, V = len(body), body.shape[1], garment.shape[1]
@@ -115,7 +112,3 @@ def main() -> int:
         if not args.keep and args.out is None:
             shutil.rmtree(out, ignore_errors=True)
     return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
