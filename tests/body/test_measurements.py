@@ -1,0 +1,121 @@
+"""Body measurements of the default body's presets: sensible order, consistent with the joints,
+within adult anthropometric ranges, deterministic."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from datagen.body.measurements import BodyMeasurements, MeshTopology, measure_body, plane_loops
+from datagen.body.shapes import PRESET_NAMES, preset_betas
+from datagen.errors import InputError
+
+
+@pytest.fixture(scope="session")
+def preset_measurements(default_body) -> dict[str, BodyMeasurements]:
+    return {name: measure_body(default_body, preset_betas(default_body, name)) for name in PRESET_NAMES}
+
+
+@pytest.fixture(scope="session")
+def rest(default_body):
+    """name -> (rest vertices [V, 3], rest joints [24, 3]) of each preset."""
+    out = {}
+    for name in PRESET_NAMES:
+        b = preset_betas(default_body, name)[None]
+        out[name] = (default_body.shaped(b)[0], default_body.rest_joints(b)[0])
+    return out
+
+
+def _joint_height(default_body, rest, preset: str, joint: str) -> float:
+    v, j = rest[preset]
+    return float(j[default_body.joint_names.index(joint), 1] - v[:, 1].min())
+
+
+def test_every_measurement_positive_and_finite(preset_measurements):
+    for name, m in preset_measurements.items():
+        values = m.as_dict()
+        assert set(values) == {f.name for f in dataclasses.fields(BodyMeasurements)}
+        bad = {k: v for k, v in values.items() if not (np.isfinite(v) and v > 0)}
+        assert not bad, f"{name}: {bad}"
+
+
+def test_girths_in_a_sensible_order(preset_measurements):
+    for name, m in preset_measurements.items():
+        assert m.neck < m.wrist * 3 < m.neck * 1.5, name  # a neck is about two wrists round
+        assert m.neck < m.waist and m.wrist < m.upper_arm < m.thigh, name
+        assert m.ankle < m.knee < m.thigh, name
+        assert m.underbust < m.chest, name
+    regular = preset_measurements["regular"]
+    assert regular.hip > regular.waist and regular.chest > regular.waist
+
+
+def test_fat_regular_thin_ordered(preset_measurements):
+    thin, regular, fat = (preset_measurements[n] for n in ("thin", "regular", "fat"))
+    for field in ("chest", "underbust", "waist", "hip", "thigh", "upper_arm", "neck", "armhole"):
+        assert getattr(fat, field) > getattr(regular, field) > getattr(thin, field), field
+    # the presets share a stature (1.70 m): heights and lengths barely move with mass
+    for field in ("height", "crotch_height", "knee_height", "ankle_height", "arm_length"):
+        values = [getattr(m, field) for m in (thin, regular, fat)]
+        assert max(values) - min(values) < 0.03, (field, values)
+
+
+def test_heights_consistent_with_joints(default_body, rest, preset_measurements):
+    for name, m in preset_measurements.items():
+        jh = lambda joint: _joint_height(default_body, rest, name, joint)  # noqa: E731
+        # the natural waist (the narrowest torso) lies above the lumbar joint and below the chest joint
+        assert jh("spine1") < m.waist_height < jh("spine3"), name
+        assert m.crotch_height < min(jh("left_hip"), jh("right_hip")), name
+        assert m.crotch_height < m.hip_height < jh("pelvis") + 0.02, name
+        assert abs(m.knee_height - jh("left_knee")) < 0.02, name
+        assert m.ankle_height < m.knee_height < m.crotch_height < m.waist_height < m.underbust_height, name
+        assert m.underbust_height < m.chest_height < m.armpit_height < m.shoulder_height < m.neck_height, name
+        assert m.armpit_height < jh("left_shoulder") < m.shoulder_height, name
+        assert m.front_neck_height < m.neck_height, name
+        assert m.neck_height < m.height, name
+        assert m.crotch_depth == pytest.approx(m.waist_height - m.crotch_height)
+        assert m.inseam == pytest.approx(m.crotch_height - m.ankle_height)
+
+
+# Adult ranges for girths [m], wide enough to hold the 1st-99th percentiles of both sexes
+# in ANSUR II (Gordon et al. 2014, US Army, 4,082 men and 1,986 women; summary statistics):
+# chest 0.78-1.30, waist (natural indentation) 0.60-1.25, buttock (hip) 0.82-1.30, neck 0.29-0.46,
+# biceps 0.22-0.43, wrist 0.13-0.19, thigh 0.45-0.76, ankle (minimum) 0.18-0.28 (lower leg just
+# above the malleoli). The presets are 1.70 m tall with BMI 18.5 / 23 / 31, inside that population.
+ANSUR_RANGES = {
+    "chest": (0.78, 1.30), "waist": (0.60, 1.25), "hip": (0.82, 1.30), "neck": (0.29, 0.48),
+    "upper_arm": (0.22, 0.43), "wrist": (0.13, 0.19), "thigh": (0.45, 0.76), "ankle": (0.18, 0.28),
+}
+
+
+def test_girths_within_adult_ranges(preset_measurements):
+    for name, m in preset_measurements.items():
+        for field, (lo, hi) in ANSUR_RANGES.items():
+            assert lo <= getattr(m, field) <= hi, (name, field, getattr(m, field))
+        assert 1.65 < m.height < 1.75, name
+
+
+def test_deterministic(default_body, preset_measurements):
+    again = measure_body(default_body, preset_betas(default_body, "regular")[None])
+    assert again == preset_measurements["regular"]
+
+
+def test_plane_loops_of_a_box():
+    """Two disjoint unit cubes cut halfway: two square loops of perimeter 4."""
+    corners = np.array([[x, y, z] for x in (0, 1) for y in (0, 1) for z in (0, 1)], dtype=float)
+    quads = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+    tris = np.array([t for a, b, c, d in quads for t in ((a, b, c), (a, c, d))])
+    vertices = np.concatenate([corners, corners + [3, 0, 0]])
+    faces = np.concatenate([tris, tris + 8])
+    loops = plane_loops(vertices, MeshTopology.of(faces), (0, 0.5, 0), (0, 1, 0))
+    assert len(loops) == 2
+    for loop in loops:
+        assert np.allclose(loop[:, 1], 0.5)
+        ring = loop[:, [0, 2]]
+        assert np.ptp(ring[:, 0]) == pytest.approx(1.0) and np.ptp(ring[:, 1]) == pytest.approx(1.0)
+
+
+def test_bad_input_is_a_clear_error(default_body):
+    with pytest.raises(InputError, match="β values"):
+        measure_body(default_body, np.zeros(default_body.shape_dim + 1))
