@@ -174,19 +174,24 @@ class Edge:
         """``n`` >= 2 points [n, 2] equally spaced by arc length from start to end (both included)."""
         if n < 2:
             raise InputError(f"an edge is sampled with at least 2 points, got {n}")
+        return self.points_at(panel, np.linspace(0.0, 1.0, n))
+
+    def points_at(self, panel: Panel, fractions) -> np.ndarray:
+        """Points [len(fractions), 2] at the given fractions (0 = start, 1 = end) of the arc length."""
+        f = np.clip(np.asarray(fractions, dtype=float), 0.0, 1.0)
+        p0, p1 = np.asarray(panel.vertices[self.start]), np.asarray(panel.vertices[self.end])
         if isinstance(self.curve, Arc):  # equal angles are equal lengths: exact points on the circle
-            p0, p1 = panel.vertices[self.start], panel.vertices[self.end]
             centre, a0, sweep = arc_geometry(p0, p1, self.curve)
-            a = a0 + sweep * np.linspace(0.0, 1.0, n)
+            a = a0 + sweep * f
             out = centre + self.curve.radius * np.stack([np.cos(a), np.sin(a)], axis=1)
-            out[0], out[-1] = p0, p1
-            return out
-        pts = self._dense(panel)
-        seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
-        s = np.concatenate([[0.0], np.cumsum(seg)])
-        target = np.linspace(0.0, s[-1], n)
-        out = np.stack([np.interp(target, s, pts[:, 0]), np.interp(target, s, pts[:, 1])], axis=1)
-        out[0], out[-1] = pts[0], pts[-1]
+        else:
+            pts = self._dense(panel)
+            seg = np.linalg.norm(np.diff(pts, axis=0), axis=1)
+            s = np.concatenate([[0.0], np.cumsum(seg)])
+            target = f * s[-1]
+            out = np.stack([np.interp(target, s, pts[:, 0]), np.interp(target, s, pts[:, 1])], axis=1)
+        out[f == 0.0] = p0
+        out[f == 1.0] = p1
         return out
 
 
