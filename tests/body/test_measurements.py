@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from datagen.body.measurements import BodyMeasurements, MeshTopology, measure_body, plane_loops
-from datagen.body.shapes import PRESET_NAMES, preset_betas
+from datagen.body.shapes import PRESET_NAMES, preset_betas, sample_betas
 from datagen.errors import InputError
 
 
@@ -33,18 +33,23 @@ def _joint_height(default_body, rest, preset: str, joint: str) -> float:
     return float(j[default_body.joint_names.index(joint), 1] - v[:, 1].min())
 
 
+COORDINATES = ("floor_y", "centre_z")
+
+
 def test_every_measurement_positive_and_finite(preset_measurements):
     for name, m in preset_measurements.items():
         values = m.as_dict()
         assert set(values) == {f.name for f in dataclasses.fields(BodyMeasurements)}
-        bad = {k: v for k, v in values.items() if not (np.isfinite(v) and v > 0)}
+        bad = {k: v for k, v in values.items() if not np.isfinite(v) or (k not in COORDINATES and v <= 0)}
         assert not bad, f"{name}: {bad}"
 
 
 def test_girths_in_a_sensible_order(preset_measurements):
     for name, m in preset_measurements.items():
-        assert m.neck < m.wrist * 3 < m.neck * 1.5, name  # a neck is about two wrists round
-        assert m.neck < m.waist and m.wrist < m.upper_arm < m.thigh, name
+        assert m.neck_narrowest < m.neck < m.waist, name
+        assert m.wrist * 1.8 < m.neck_narrowest < m.wrist * 2.6, name  # a neck is about two wrists round
+        assert m.wrist < m.upper_arm < m.thigh < m.hip, name
+        assert m.armhole > m.upper_arm, name
         assert m.ankle < m.knee < m.thigh, name
         assert m.underbust < m.chest, name
     regular = preset_measurements["regular"]
@@ -53,7 +58,7 @@ def test_girths_in_a_sensible_order(preset_measurements):
 
 def test_fat_regular_thin_ordered(preset_measurements):
     thin, regular, fat = (preset_measurements[n] for n in ("thin", "regular", "fat"))
-    for field in ("chest", "underbust", "waist", "hip", "thigh", "upper_arm", "neck", "armhole"):
+    for field in ("chest", "underbust", "waist", "hip", "thigh", "upper_arm", "neck", "neck_narrowest", "armhole"):
         assert getattr(fat, field) > getattr(regular, field) > getattr(thin, field), field
     # the presets share a stature (1.70 m): heights and lengths barely move with mass
     for field in ("height", "crotch_height", "knee_height", "ankle_height", "arm_length"):
@@ -78,14 +83,17 @@ def test_heights_consistent_with_joints(default_body, rest, preset_measurements)
         assert m.inseam == pytest.approx(m.crotch_height - m.ankle_height)
 
 
-# Adult ranges for girths [m], wide enough to hold the 1st-99th percentiles of both sexes
-# in ANSUR II (Gordon et al. 2014, US Army, 4,082 men and 1,986 women; summary statistics):
-# chest 0.78-1.30, waist (natural indentation) 0.60-1.25, buttock (hip) 0.82-1.30, neck 0.29-0.46,
-# biceps 0.22-0.43, wrist 0.13-0.19, thigh 0.45-0.76, ankle (minimum) 0.18-0.28 (lower leg just
-# above the malleoli). The presets are 1.70 m tall with BMI 18.5 / 23 / 31, inside that population.
+# Adult girth ranges [m]: about the 1st percentile of ANSUR II's women to the 99th of its men
+# (ANSUR II: Gordon et al. 2014, "2012 Anthropometric Survey of U.S. Army Personnel: Methods and
+# Summary Statistics", NATICK/TR-15/007; 4,082 men, 1,986 women), each mean +- 2.5 SD as quoted
+# from memory of its summary tables, rounded outwards: chest circumference, waist circumference,
+# buttock circumference (hip), neck circumference (below the larynx, across the neck: our
+# neck_narrowest), biceps circumference, wrist circumference, thigh circumference, minimum lower
+# leg (ankle) circumference. The presets are 1.70 m tall with BMI 18.5 / 23 / 31: inside that
+# population, so each of their girths must fall inside these ranges.
 ANSUR_RANGES = {
-    "chest": (0.78, 1.30), "waist": (0.60, 1.25), "hip": (0.82, 1.30), "neck": (0.29, 0.48),
-    "upper_arm": (0.22, 0.43), "wrist": (0.13, 0.19), "thigh": (0.45, 0.76), "ankle": (0.18, 0.28),
+    "chest": (0.78, 1.30), "waist": (0.60, 1.25), "hip": (0.82, 1.30), "neck_narrowest": (0.29, 0.46),
+    "upper_arm": (0.22, 0.43), "wrist": (0.13, 0.20), "thigh": (0.45, 0.76), "ankle": (0.18, 0.28),
 }
 
 
@@ -94,6 +102,17 @@ def test_girths_within_adult_ranges(preset_measurements):
         for field, (lo, hi) in ANSUR_RANGES.items():
             assert lo <= getattr(m, field) <= hi, (name, field, getattr(m, field))
         assert 1.65 < m.height < 1.75, name
+
+
+def test_random_shapes_measure_in_order(default_body):
+    """Ten shapes drawn as datasets draw them (β ~ N(0, I), |β| <= 2.5): every measurement
+    positive, the landmarks stacked from ankle to shoulder, the girths ordered."""
+    for betas in sample_betas(11, 10, default_body.shape_dim):
+        m = measure_body(default_body, betas)
+        assert m.ankle_height < m.knee_height < m.crotch_height < m.hip_height < m.waist_height, betas
+        assert m.waist_height < m.underbust_height < m.chest_height < m.armpit_height < m.shoulder_height, betas
+        assert m.ankle < m.knee < m.thigh and m.wrist < m.upper_arm, betas
+        assert m.neck_narrowest < m.neck < m.waist < m.hip and m.underbust < m.chest, betas
 
 
 def test_deterministic(default_body, preset_measurements):
