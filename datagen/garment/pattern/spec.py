@@ -26,8 +26,10 @@ drape's panel space is seen from outside the garment (outlines counter-clockwise
 the body's frame: its back panels run clockwise with no rotation. Such a panel is read mirrored
 (``x -> -x``, a half turn about its y axis added to its rotation), which places every point where
 GarmentCode puts it. drape writes counter-clockwise panels; GarmentCode reads them as they are.
-Stitch sides of several edges are written as one stitch per edge pair, which needs both sides to
-have the same number of edges (otherwise :class:`InputError`); drape reads such pairs back as one. Extra keys that GarmentCode ignores
+Stitch sides of several edges are written as one stitch per edge pair; where the two sides have
+different numbers of edges, edges are split first at the other side's corners
+(:mod:`~datagen.garment.pattern.split`), each piece marked ``"drape_piece": [edge, t0, t1]``, and
+drape joins them back on reading. Extra keys that GarmentCode ignores
 keep what its format lacks: ``"grain"`` and ``"edge_groups"`` per panel, ``"ease"`` on a stitch's
 first side (``"seam"`` there too when one stitch of several edges became several pairs), ``"name"``
 and ``"design"`` at the top.
@@ -47,6 +49,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.garment.pattern.model import (STITCH_TOLERANCE, Arc, Cubic, Edge, Panel, Pattern, Quadratic,
                                            SeamSide, Stitch)
+from datagen.garment.pattern.split import join_curve, pair_stitches
 
 __all__ = ["abs_to_rel", "read_spec", "rel_to_abs", "spec_dict", "write_spec"]
 
@@ -125,6 +128,13 @@ def _read_panel(name: str, spec: Mapping, scale: float, absolute: bool) -> tuple
                 raise ValueError(f"unknown curvature type {kind!r} (quadratic, cubic or circle)")
         except (TypeError, ValueError) as exc:
             raise InputError(f"{who}: edge {k}: bad curvature {c!r}: {exc}") from None
+    ends, curves, file_to_edge = _join_pieces(verts, ends, curves, [e.get("drape_piece") for e in edge_specs])
+    if len(file_to_edge) != len(edge_specs) or max(file_to_edge, default=-1) + 1 != len(ends):
+        raise InputError(f"{who}: its 'drape_piece' marks do not describe consecutive pieces of edges")
+    used = sorted({i for i, _ in ends})
+    if used and used[-1] + 1 < len(verts):  # the points drape inserted to split edges come last
+        verts = verts[: used[-1] + 1]
+
     def build_edges(flip: np.ndarray, mirror: bool) -> list[Edge]:
         edges = []
         for (i, j), c in zip(ends, curves):
@@ -151,19 +161,54 @@ def _read_panel(name: str, spec: Mapping, scale: float, absolute: bool) -> tuple
     edges = build_edges(flip, mirrored)
     groups: dict[str, tuple[int, ...]] = {}
     if isinstance(spec.get("edge_groups"), Mapping):
-        groups = {str(k): tuple(int(x) for x in v) for k, v in spec["edge_groups"].items()}
+        groups = {str(k): tuple(dict.fromkeys(file_to_edge[int(x)] for x in v)) for k, v in spec["edge_groups"].items()}
     else:  # GarmentCode's edge labels become groups
         for k, e in enumerate(edge_specs):
-            if e.get("label"):
+            if e.get("label") and file_to_edge[k] not in groups.get(str(e["label"]), ()):
                 groups.setdefault(str(e["label"]), ())
-                groups[str(e["label"])] += (k,)
+                groups[str(e["label"])] += (file_to_edge[k],)
     grain = np.asarray(spec.get("grain", (0.0, 1.0)), dtype=float) * flip
     rotation = tuple(float(x) for x in spec.get("rotation", (0, 0, 0)))
     translation = tuple(float(x) * scale for x in spec.get("translation", (0, 0, 0)))
     panel = Panel(name=name, vertices=[tuple(v) for v in verts * flip], edges=edges,
                   translation=translation, rotation=_mirror_rotation(rotation) if mirrored else rotation,
                   grain=tuple(grain / max(np.linalg.norm(grain), 1e-12)), edge_groups=groups)
-    return panel, mirrored
+    return panel, mirrored, file_to_edge
+
+
+def _join_pieces(verts, ends, curves, marks):
+    """Edges drape split to write a stitch (marked ``drape_piece: [edge, t0, t1]``) joined back.
+
+    Returns the joined ends and curves, and the joined index of every edge of the file."""
+    if not any(m is not None for m in marks):
+        return ends, curves, list(range(len(ends)))
+    out_ends, out_curves, index = [], [], []
+    k = 0
+    while k < len(ends):
+        m = marks[k]
+        run = [k]
+        while (m is not None and run[-1] + 1 < len(ends) and marks[run[-1] + 1] is not None
+               and int(marks[run[-1] + 1][0]) == int(m[0])):
+            run.append(run[-1] + 1)
+        i, j = ends[run[0]][0], ends[run[-1]][1]
+        c = curves[run[0]]
+        if len(run) > 1 and c is not None:
+            t0, t1 = float(m[1]), float(m[2])
+            a, b = verts[ends[run[0]][0]], verts[ends[run[0]][1]]
+            if c[0] == "arc":
+                joined = join_curve(a, b, [(Arc(radius=c[1], large_arc=c[2], right=c[3]), t0, t1)], a, b)
+                c = ("arc", joined.radius, joined.large_arc, joined.right)
+            else:
+                obj = Quadratic(control=tuple(c[1][0])) if len(c[1]) == 1 else Cubic(control1=tuple(c[1][0]),
+                                                                                     control2=tuple(c[1][1]))
+                joined = join_curve(a, b, [(obj, t0, t1)], a, b)
+                c = ("bezier", np.array([joined.control]) if isinstance(joined, Quadratic)
+                     else np.array([joined.control1, joined.control2]))
+        out_ends.append((i, j))
+        out_curves.append(c)
+        index += [len(out_ends) - 1] * len(run)
+        k = run[-1] + 1
+    return out_ends, out_curves, index
 
 
 def _load(source) -> tuple[dict, str]:
@@ -204,17 +249,20 @@ def read_spec(source) -> Pattern:
     absolute = props.get("curvature_coords", "relative") == "absolute"
     order = [n for n in pat.get("panel_order", []) if n in panel_specs]
     order += [n for n in panel_specs if n not in order]
-    panels, mirrored = [], {}
+    panels, mirrored, edge_of = [], {}, {}
     for pname in order:
-        p, m = _read_panel(str(pname), panel_specs[pname], 1.0 / units, absolute)
+        p, m, idx = _read_panel(str(pname), panel_specs[pname], 1.0 / units, absolute)
         panels.append(p)
         mirrored[p.name] = m
+        edge_of[p.name] = idx
     by_name = {p.name: p for p in panels}
     stitches, seam_of = [], {}
     for k, st in enumerate(pat.get("stitches", [])):
         try:
             sides = [(str(s["panel"]), s["edge"]) for s in st[:2]]
-        except (KeyError, TypeError, IndexError):
+            sides = [(pn, edge_of[pn][int(e)] if pn in edge_of and 0 <= int(e) < len(edge_of[pn]) else int(e))
+                     for pn, e in sides]
+        except (KeyError, TypeError, IndexError, ValueError):
             raise InputError(f"stitch {k}: expected [{{'panel': name, 'edge': index}}, {{...}}], got {st!r}") from None
         if len(sides) != 2:
             raise InputError(f"stitch {k} has {len(sides)} sides; a stitch joins two edges")
@@ -222,8 +270,12 @@ def read_spec(source) -> Pattern:
         seam = st[0].get("seam") if isinstance(st[0], Mapping) else None
         if seam is not None and seam in seam_of:  # drape wrote one stitch of several edges as pairs
             prev = stitches[seam_of[seam]]
-            a = SeamSide(panel=prev.a.panel, edges=prev.a.edges + (int(sides[0][1]),))
-            b_edges = (int(sides[1][1]),) + prev.b.edges if prev.reversed else prev.b.edges + (int(sides[1][1]),)
+            ea, eb = int(sides[0][1]), int(sides[1][1])
+            a = SeamSide(panel=prev.a.panel, edges=prev.a.edges + ((ea,) if ea not in prev.a.edges else ()))
+            if eb in prev.b.edges:
+                b_edges = prev.b.edges
+            else:
+                b_edges = (eb,) + prev.b.edges if prev.reversed else prev.b.edges + (eb,)
             stitches[seam_of[seam]] = Stitch(a=a, b=SeamSide(panel=prev.b.panel, edges=b_edges),
                                              reversed=prev.reversed, ease=prev.ease)
             continue
@@ -260,6 +312,7 @@ def _json_value(v):
 def spec_dict(pattern: Pattern, units_in_meter: float = UNITS_IN_METER) -> dict:
     """The GarmentCode specification of ``pattern`` as a JSON-able dict (see :func:`write_spec`)."""
     s = float(units_in_meter)
+    pattern, pieces = pair_stitches(pattern)
     panels = {}
     for p in pattern.panels:
         v = np.asarray(p.vertices)
@@ -281,6 +334,8 @@ def spec_dict(pattern: Pattern, units_in_meter: float = UNITS_IN_METER) -> dict:
                 d["curvature"] = {"type": "circle", "params": [c.radius * s, int(c.large_arc), int(c.right)]}
             if k in labels:
                 d["label"] = labels[k]
+            if (p.name, k) in pieces:
+                d["drape_piece"] = list(pieces[(p.name, k)])
             edges.append(d)
         panels[p.name] = {
             "vertices": (v * s).tolist(), "edges": edges,
@@ -290,11 +345,6 @@ def spec_dict(pattern: Pattern, units_in_meter: float = UNITS_IN_METER) -> dict:
     stitches = []
     for k, st in enumerate(pattern.stitches):
         ea, eb = st.a.edges, st.b.edges
-        if len(ea) != len(eb):
-            raise InputError(
-                f"pattern '{pattern.name}': stitch {k} joins {len(ea)} edge(s) of '{st.a.panel}' to {len(eb)} of "
-                f"'{st.b.panel}'; GarmentCode's format stitches one edge to one edge: split the edges so both "
-                f"sides have as many")
         # sewn order: a's edges in loop order meet b's in reverse loop order when the stitch is reversed
         pairs = zip(ea, reversed(eb) if st.reversed else eb)
         for n, (i, j) in enumerate(pairs):

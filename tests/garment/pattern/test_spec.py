@@ -168,8 +168,52 @@ def test_bad_files_say_what_is_wrong(tmp_path):
         read_spec({"pattern": {"panels": {"p": {"vertices": [[0, 0], [1, 0], [0, 1]], "edges": [
             {"endpoints": [0, 1], "curvature": {"type": "spline", "params": []}},
             {"endpoints": [1, 2]}, {"endpoints": [2, 0]}]}}, "stitches": []}, "properties": {"units_in_meter": 1}})
-    with pytest.raises(InputError, match="one edge to one edge"):
-        p = own_pattern()
-        uneven = Pattern(name="u", panels=p.panels, stitches=(
-            Stitch(a=SeamSide(panel="front", edges=(2, 3)), b=SeamSide(panel="band", edges=(0,)), ease=0.6),))
-        spec_dict(uneven)
+
+
+def uneven_pattern() -> Pattern:
+    """Two edges (a quadratic and an arc) of one panel sewn to one straight edge of another."""
+    p = own_pattern()
+    front = p.panel("front")
+    total = front.edge_length(2) + front.edge_length(3)
+    strip = Panel(name="strip", vertices=[(0, 0), (total, 0), (total, 0.04), (0, 0.04)],
+                  edges=[Edge(start=i, end=(i + 1) % 4) for i in range(4)], edge_groups={"top": (2,)})
+    return Pattern(name="uneven", panels=(front, p.panel("back"), strip), stitches=(
+        p.stitches[0], p.stitches[1],
+        Stitch(a=SeamSide(panel="front", edges=(2, 3)), b=SeamSide(panel="strip", edges=(0,))),
+    ))
+
+
+def test_uneven_stitch_is_written_as_split_pairs_and_read_back_whole(tmp_path):
+    p = uneven_pattern()
+    data = spec_dict(p)
+    st = data["pattern"]["stitches"][2:]
+    # the strip's edge 0 is split in two (its new edges 0 and 1), sewn in reverse order
+    assert [(s[0]["edge"], s[1]["edge"]) for s in st] == [(2, 1), (3, 0)]
+    strip = data["pattern"]["panels"]["strip"]
+    assert [e.get("drape_piece", [None])[0] for e in strip["edges"]] == [0, 0, None, None, None]
+    assert strip["edge_groups"] == {"top": [3]}
+    q = read_spec(write_spec(p, tmp_path / "uneven_specification.json"))
+    assert_same(p, q)
+    # what GarmentCode reads (drape's marks ignored): every one-edge pair of the same length
+    for panel in data["pattern"]["panels"].values():
+        for e in panel["edges"]:
+            e.pop("drape_piece", None)
+    for s in data["pattern"]["stitches"]:
+        s[0].pop("seam", None)
+        s[0].pop("ease", None)
+    plain = read_spec(data)
+    assert len(plain.panel("strip").edges) == 5
+    assert all(s.ease == 0 for s in plain.stitches)
+
+
+def test_split_curves_join_back_exactly():
+    from datagen.garment.pattern.split import join_curve, split_curve
+    p = own_pattern().panel("front")
+    for k in (0, 2, 3):
+        e = p.edges[k]
+        parts = split_curve(p, e, [0.3, 0.7])
+        start = np.asarray(p.vertices[e.start])
+        joined = join_curve(start, p.vertices[e.end], [(parts[0][1], 0.0, 0.3)], start, parts[0][0])
+        ref = e.sample(p, 50)
+        back = Edge(start=e.start, end=e.end, curve=joined).sample(p, 50)
+        np.testing.assert_allclose(back, ref, atol=1e-9)
