@@ -69,15 +69,19 @@ def test_fat_regular_thin_ordered(preset_measurements):
 def test_heights_consistent_with_joints(default_body, rest, preset_measurements):
     for name, m in preset_measurements.items():
         jh = lambda joint: _joint_height(default_body, rest, name, joint)  # noqa: E731
-        # the natural waist (the narrowest torso) lies above the lumbar joint and below the chest joint
-        assert jh("spine1") < m.waist_height < jh("spine3"), name
-        assert m.crotch_height < min(jh("left_hip"), jh("right_hip")), name
-        assert m.crotch_height < m.hip_height < jh("pelvis") + 0.02, name
-        assert abs(m.knee_height - jh("left_knee")) < 0.02, name
+        # the waist and hip are true extremes: found inside their search ranges, not at an end
+        waist_top = 0.5 * (jh("spine2") + jh("spine3"))
+        assert jh("spine1") + 0.01 < m.waist_height < waist_top - 0.01, name
+        assert m.crotch_height + 0.015 < m.hip_height < jh("pelvis") - 0.005, name
+        # the crotch (a mesh extreme) lies below the hip joints, the armpit below the shoulder joint
+        assert m.crotch_height < min(jh("left_hip"), jh("right_hip")) - 0.05, name
+        assert m.armpit_height < jh("left_shoulder") < m.shoulder_height, name
+        assert m.front_neck_height < m.neck_height < jh("head"), name
+        # knee and ankle heights are the joints'; the knee sits at 26-32 % of stature (ANSUR II's
+        # lateral femoral epicondyle height is about 28 %)
+        assert 0.26 < m.knee_height / m.height < 0.32, name
         assert m.ankle_height < m.knee_height < m.crotch_height < m.waist_height < m.underbust_height, name
         assert m.underbust_height < m.chest_height < m.armpit_height < m.shoulder_height < m.neck_height, name
-        assert m.armpit_height < jh("left_shoulder") < m.shoulder_height, name
-        assert m.front_neck_height < m.neck_height, name
         assert m.neck_height < m.height, name
         assert m.crotch_depth == pytest.approx(m.waist_height - m.crotch_height)
         assert m.inseam == pytest.approx(m.crotch_height - m.ankle_height)
@@ -138,3 +142,18 @@ def test_plane_loops_of_a_box():
 def test_bad_input_is_a_clear_error(default_body):
     with pytest.raises(InputError, match="β values"):
         measure_body(default_body, np.zeros(default_body.shape_dim + 1))
+
+
+def test_cli_measure_prints_the_presets_measurements(capsys, preset_measurements):
+    import json
+
+    from datagen.cli import main
+
+    assert main(["body", "measure", "--body", "fat", "--json"]) == 0
+    printed = json.loads(capsys.readouterr().out)
+    expected = preset_measurements["fat"].as_dict()
+    assert set(printed) == set(expected)
+    assert all(printed[k] == pytest.approx(expected[k], abs=1e-4) for k in expected)
+    assert main(["body", "measure", "--body", "thin"]) == 0
+    text = capsys.readouterr().out
+    assert "waist" in text and "measured in" in text
