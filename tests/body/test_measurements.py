@@ -157,3 +157,30 @@ def test_cli_measure_prints_the_presets_measurements(capsys, preset_measurements
     assert main(["body", "measure", "--body", "thin"]) == 0
     text = capsys.readouterr().out
     assert "waist" in text and "measured in" in text
+
+
+def test_plane_loops_match_trimesh_sections(default_body, rest):
+    """The section points equal trimesh's (its mesh_plane segments' end points), at heights through
+    the legs, the torso and the arms, and across the arm."""
+    import trimesh
+
+    v, _ = rest["regular"]
+    mesh = trimesh.Trimesh(v, default_body.faces, process=False)
+    topology = MeshTopology.of(default_body.faces)
+    floor = v[:, 1].min()
+    for origin, normal in [((0, floor + 0.5, 0), (0, 1, 0)), ((0, floor + 1.1, 0), (0, 1, 0)),
+                           ((0, floor + 1.34, 0), (0, 1, 0)), ((0.3, 0, 0), (1, 0, 0))]:
+        ours = np.concatenate(plane_loops(v, topology, origin, normal))
+        segments = trimesh.intersections.mesh_plane(mesh, normal, origin)
+        theirs = np.unique(np.round(segments.reshape(-1, 3), 9), axis=0)
+        assert len(np.unique(np.round(ours, 9), axis=0)) == len(ours) == len(theirs), origin
+        assert np.allclose(np.sort(ours, axis=0), np.sort(theirs, axis=0), atol=1e-9), origin
+
+
+def test_plane_loops_of_an_open_sheet():
+    """A mesh with a boundary (one square of two triangles) gives one open piece of three points."""
+    vertices = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], dtype=float)
+    faces = np.array([[0, 1, 2], [0, 2, 3]])
+    pieces = plane_loops(vertices, MeshTopology.of(faces), (0.25, 0, 0), (1, 0, 0))
+    assert len(pieces) == 1 and len(pieces[0]) == 3
+    assert np.allclose(pieces[0][:, 0], 0.25)
