@@ -32,7 +32,7 @@ different numbers of edges, edges are split first at the other side's corners
 drape joins them back on reading. Extra keys that GarmentCode ignores
 keep what its format lacks: ``"grain"`` and ``"edge_groups"`` per panel, ``"ease"`` on a stitch's
 first side (``"seam"`` there too when one stitch of several edges became several pairs), ``"name"``
-and ``"design"`` at the top.
+and ``"design"`` at the top, ``"frame": "drape_rest"`` in the properties (:func:`spec_frame`).
 """
 
 from __future__ import annotations
@@ -51,12 +51,24 @@ from datagen.garment.pattern.model import (STITCH_TOLERANCE, Arc, Cubic, Edge, P
                                            SeamSide, Stitch)
 from datagen.garment.pattern.split import join_curve, pair_stitches
 
-__all__ = ["abs_to_rel", "read_spec", "rel_to_abs", "spec_dict", "write_spec"]
+__all__ = ["DRAPE_FRAME", "abs_to_rel", "read_spec", "rel_to_abs", "spec_dict", "spec_frame", "write_spec"]
 
 log = logging.getLogger(__name__)
 
 UNITS_IN_METER = 100
 """Units drape writes: centimetres, as GarmentCode."""
+
+
+DRAPE_FRAME = "drape_rest"
+"""``properties.frame`` of the files drape writes: placed in drape's rest-pose body frame (the pelvis
+near the origin). A file without it is in GarmentCode's frame, standing on the floor at y = 0."""
+
+
+def spec_frame(source) -> str:
+    """``"drape_rest"`` for a file drape wrote, ``"garmentcode"`` (standing on y = 0) otherwise."""
+    data, _ = _load(source)
+    props = data.get("properties") or {}
+    return DRAPE_FRAME if props.get("frame") == DRAPE_FRAME else "garmentcode"
 
 
 def rel_to_abs(start, end, rel) -> np.ndarray:
@@ -362,7 +374,7 @@ def spec_dict(pattern: Pattern, units_in_meter: float = UNITS_IN_METER) -> dict:
         "pattern": {"panels": panels, "stitches": stitches, "panel_order": [p.name for p in pattern.panels]},
         "parameters": {}, "parameter_order": [],
         "properties": {"curvature_coords": "relative", "normalize_panel_translation": False,
-                       "normalized_edge_loops": True, "units_in_meter": s},
+                       "normalized_edge_loops": True, "units_in_meter": s, "frame": DRAPE_FRAME},
         "design": _json_value(dict(pattern.design)),
     }
 
