@@ -16,6 +16,8 @@ ISO 8559-1:2017 (anthropometric definitions for body measurement) where a T-pose
 from __future__ import annotations
 
 import logging
+import time
+import weakref
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -148,7 +150,7 @@ class BodyMeasurements:
 
 
 # ---------------------------------------------------------------------------------- sections
-@dataclass(frozen=True)
+@dataclass(frozen=True, eq=False)
 class MeshTopology:
     """A triangle mesh's faces [F, 3], its unique edges [E, 2] and each face's edges in winding
     order [F, 3] (``face_edges[f, i]`` joins ``faces[f, i]`` and ``faces[f, (i + 1) % 3]``), for
@@ -177,8 +179,6 @@ _TOPOLOGY: dict[int, tuple[object, MeshTopology]] = {}
 def _topology(faces: np.ndarray) -> MeshTopology:
     """:class:`MeshTopology` of ``faces``, kept while the same array object lives (a body's
     faces do not change between shapes, so measuring many shapes builds it once)."""
-    import weakref
-
     hit = _TOPOLOGY.get(id(faces))
     if hit is not None and hit[0]() is faces:
         return hit[1]
@@ -579,12 +579,19 @@ def measure_body(model: BodyModel, betas=None) -> BodyMeasurements:
     """:class:`BodyMeasurements` of ``model``'s body of shape ``betas`` ([S] or [1, S]; None:
     the mean shape), measured on its T-pose rest mesh (``model.shaped``) and joints
     (``model.rest_joints``). Deterministic; a few tens of ms (see docs/body.md)."""
-    b = None if betas is None else np.asarray(betas, dtype=np.float64).reshape(1, -1)
-    if b is not None and b.shape[1] > model.shape_dim:
-        raise InputError(f"{b.shape[1]} β values given; this body has {model.shape_dim}")
+    b = None if betas is None else np.asarray(betas, dtype=np.float64)
+    if b is not None:
+        if b.ndim > 2 or (b.ndim == 2 and b.shape[0] != 1):
+            raise InputError(f"measure_body measures one shape: pass β as [S] or [1, S], got {b.shape}")
+        b = b.reshape(1, -1)
+        if b.shape[1] > model.shape_dim:
+            raise InputError(f"{b.shape[1]} β values given; this body has {model.shape_dim}")
     if model.joint_count != len(SMPL_JOINT_NAMES):
         raise InputError(f"measure_body needs SMPL's 24 joints; this model has {model.joint_count}")
     rest = model.meta.get("rest_pose", "t-pose")
     if rest != "t-pose":
         raise InputError(f"measure_body measures T-posed bodies; this model's rest pose is '{rest}'")
-    return measure_mesh(model.shaped(b)[0], model.faces, model.rest_joints(b)[0])
+    t0 = time.perf_counter()
+    out = measure_mesh(model.shaped(b)[0], model.faces, model.rest_joints(b)[0])
+    logger.debug("measured a body shape in %.0f ms", 1e3 * (time.perf_counter() - t0))
+    return out

@@ -184,3 +184,8 @@ def test_plane_loops_of_an_open_sheet():
     pieces = plane_loops(vertices, MeshTopology.of(faces), (0.25, 0, 0), (1, 0, 0))
     assert len(pieces) == 1 and len(pieces[0]) == 3
     assert np.allclose(pieces[0][:, 0], 0.25)
+
+
+def test_one_shape_at_a_time(default_body):
+    with pytest.raises(InputError, match="one shape"):
+        measure_body(default_body, np.zeros((2, default_body.shape_dim)))
