@@ -99,6 +99,9 @@ class BodyMeasurements:
             the joint in z.
         knee_height, ankle_height: the left knee and ankle joints'.
 
+    Half-widths (|x| from the midline, the body being left-right symmetric; the left side's):
+        shoulder_x: the shoulder point's; armpit_x: the armpit's; bust_x: the bust point's.
+
     Placement (coordinates in the body's rest frame, not lengths; may be negative):
         floor_y: the floor's y (the lowest vertex's).
         centre_z: z of the area centroid of the waist section's convex hull (the torso's middle,
@@ -135,6 +138,9 @@ class BodyMeasurements:
     shoulder_height: float
     knee_height: float
     ankle_height: float
+    shoulder_x: float
+    armpit_x: float
+    bust_x: float
     floor_y: float = 0.0
     centre_z: float = 0.0
 
@@ -517,6 +523,7 @@ def measure_mesh(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray) ->
     acromion_l, acromion_r = points
     shoulder_y = 0.5 * (acromion_l[1] + acromion_r[1])
 
+
     # shoulder width: across the back in the plane through both shoulder points and the back neck point
     normal = np.cross(acromion_l - c7, acromion_r - c7)
     normal /= np.linalg.norm(normal)
@@ -571,7 +578,9 @@ def measure_mesh(vertices: np.ndarray, faces: np.ndarray, joints: np.ndarray) ->
         waist_height=h(waist_y), hip_height=h(hip_y), crotch_height=h(crotch_y), chest_height=h(chest_y),
         underbust_height=h(underbust_y), armpit_height=h(armpit_y), neck_height=h(jy["neck"]),
         front_neck_height=h(front_neck_y), shoulder_height=h(shoulder_y), knee_height=h(knee_j[1]),
-        ankle_height=h(ankle_j[1]), floor_y=floor, centre_z=centre_z,
+        ankle_height=h(ankle_j[1]),
+        shoulder_x=float(acromion_l[0]), armpit_x=float(armpit[0]), bust_x=float(abs(bust[0])),
+        floor_y=floor, centre_z=centre_z,
     )
 
 

@@ -77,6 +77,10 @@ def test_heights_consistent_with_joints(default_body, rest, preset_measurements)
         assert m.crotch_height < min(jh("left_hip"), jh("right_hip")) - 0.05, name
         assert m.armpit_height < jh("left_shoulder") < m.shoulder_height, name
         assert m.front_neck_height < m.neck_height < jh("head"), name
+        # half-widths: the bust point inside the shoulder point, the armpit just outside it
+        sx = float(rest[name][1][default_body.joint_names.index("left_shoulder"), 0])
+        assert 0.03 < m.bust_x < m.shoulder_x < m.armpit_x < sx + 0.08, name
+        assert m.shoulder_x == pytest.approx(sx, abs=0.005), name
         # knee and ankle heights are the joints'; the knee sits at 26-32 % of stature (ANSUR II's
         # lateral femoral epicondyle height is about 28 %)
         assert 0.26 < m.knee_height / m.height < 0.32, name
