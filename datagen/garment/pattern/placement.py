@@ -6,7 +6,8 @@ Two modes (:func:`place`):
   and the programs' placement), then pushed out of the body.
 - ``"wrap"`` (default): each flat panel is first bent, without stretching, around an axis along its
   own y direction through the middle of the body behind it (a cylinder of the panel's distance to
-  that axis), so a front and a back panel meet at the sides; then pushed out of the body. Bending
+  that axis; wider, with the axis moved back, for a panel that would turn more than 99 degrees either
+  side), so a front and a back panel meet at the sides; then pushed out of the body. Bending
   is isometric, so the rest state (the flat panel) is unstrained; the stitched pairs start closer.
 
 Pushing out: a vertex inside the body or closer than ``clearance`` to it moves to the closest body
@@ -33,6 +34,9 @@ CLEARANCE = 0.008
 """Smallest distance [m] between a placed vertex and the body (the procedural garments' MIN_CLEARANCE)."""
 
 Mode = Literal["flat", "wrap"]
+
+_MAX_TURN = 0.55 * np.pi
+"""Largest angle [rad] a wrapped panel turns either side of its middle."""
 
 
 def _flat(mesh: FlatPatternMesh) -> np.ndarray:
@@ -62,6 +66,12 @@ def _wrap(mesh: FlatPatternMesh, body_vertices: np.ndarray) -> np.ndarray:
         d = float((origin - axis) @ n)
         if d <= 0.02:
             continue  # the panel cuts through the body's middle: bending would fold it; the push handles it
+        # a panel wider than half the way around (a circle skirt's) gets a larger radius, the axis
+        # moved back: it turns at most _MAX_TURN either side, so it does not wrap over itself
+        half = float(np.abs((pts - axis) @ ex).max())
+        if half / d > _MAX_TURN:
+            axis = axis - n * (half / _MAX_TURN - d)
+            d = half / _MAX_TURN
         rel = pts - axis
         x, y = rel @ ex, rel @ ey
         theta = x / d
