@@ -17,7 +17,7 @@ def register(sub, formatter) -> None:
     body = sub.add_parser(
         "body", formatter_class=formatter, help="build, export and describe the body model",
         description="The SMPL-format body: built offline from Anny (no licence, no download), or an SMPL file you have.",
-        epilog="examples:\n  drape body build --out body.pkl\n  drape body export --body fat --pose a-pose --format obj --out fat.obj\n  drape body info",
+        epilog="examples:\n  drape body build --out body.pkl\n  drape body export --body fat --pose a-pose --format obj --out fat.obj\n  drape body info\n  drape body measure --body fat",
     )
     bsub = body.add_subparsers(dest="body_command", metavar="BODY_COMMAND")
     bsub.required = True
