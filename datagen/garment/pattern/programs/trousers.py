@@ -95,8 +95,8 @@ def build_trousers(design, m: BodyMeasurements, name: str) -> Pattern:
                 + [Seg((hf + dx, yh), Quadratic(control=(hf + dx, yh + 0.6 * (yw - yh))), "out_hi")])
 
     front = ([Seg(hi_f, None, "hem", "hem")] + side(0.0)
-             + [Seg((wf, yw), None, "waist", "waist"), Seg((0.0, yw), None, "cf_hi"),
-                Seg((0.0, yhc), Quadratic(control=(0.0, yc)), "cf_lo"), Seg(cf, None, "inseam")])
+             + [Seg((wf, yw), None, "waist", "waist"), Seg((0.0, yw), None, "cf_hi", "crotch"),
+                Seg((0.0, yhc), Quadratic(control=(0.0, yc)), "cf_lo", "crotch"), Seg(cf, None, "inseam", "inseam")])
     inseam = math.dist(cf, hi_f)
     # back: the inside leg matches the front's by lowering the crotch point, or moving the hem's corner
     hi_b = (ho_b[0] - bhw, ye)
@@ -107,8 +107,8 @@ def build_trousers(design, m: BodyMeasurements, name: str) -> Pattern:
         hi_b = (-eb + math.sqrt(max(inseam**2 - (ycb - ye) ** 2, 0.0)), ye)
     cb = (-eb, ycb)
     back = ([Seg(hi_b, None, "hem", "hem")] + side(delta)
-            + [Seg((wf + delta, yw), None, "waist", "waist"), Seg((0.02, yw + BACK_RAISE), None, "cb_hi"),
-               Seg((0.0, yhc), Quadratic(control=(0.0, ycb)), "cb_lo"), Seg(cb, None, "inseam")])
+            + [Seg((wf + delta, yw), None, "waist", "waist"), Seg((0.02, yw + BACK_RAISE), None, "cb_hi", "crotch"),
+               Seg((0.0, yhc), Quadratic(control=(0.0, ycb)), "cb_lo", "crotch"), Seg(cb, None, "inseam", "inseam")])
 
     dz = torso_half_depth(hip)
     tf = (0.0, f.floor_y, f.centre_z + dz)
