@@ -28,8 +28,8 @@ from datagen.garment.pattern.programs.garments import (DRESS_SPACE, JACKET_SPACE
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
 from datagen.garment.pattern.programs.trousers import SHORTS_SPACE, TROUSERS_SPACE, build_trousers
 
-__all__ = ["PROGRAMS", "Choice", "DesignSpace", "PatternProgram", "Range", "count_designs", "design_of",
-           "make_pattern"]
+__all__ = ["PROGRAMS", "Choice", "DesignSpace", "PatternProgram", "Range", "count_designs", "count_families",
+           "design_of", "make_pattern"]
 
 SEED_SALT = 60
 """Salts every program's draw (with the program's name), so programs never share a stream."""
@@ -123,4 +123,13 @@ def count_designs(coarse: bool = False) -> dict[str, int]:
             space = DesignSpace(tuple(Range(name=p.name, low=p.low, high=p.low, step=1.0, unit=p.unit, doc=p.doc,
                                             when=p.when) if isinstance(p, Range) else p for p in space.params))
         out[name] = space.count()
+    return out
+
+
+def count_families(coarse: bool = False) -> dict[str, int]:
+    """:func:`count_designs` summed per family (programs of one family make different designs)."""
+    out: dict[str, int] = {}
+    for name, n in count_designs(coarse).items():
+        fam = PROGRAMS[name].family
+        out[fam] = out.get(fam, 0) + n
     return out

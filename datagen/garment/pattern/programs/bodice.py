@@ -120,7 +120,7 @@ def bodice_fit(design, m: BodyMeasurements, frame: Frame, *, hem_y: float, ease:
     else:
         x_s -= float(design.get("strap", 0.0))
         y_u = min(m.armpit_height - float(design.get("armhole_drop", 0.04)), y_s - 0.08)
-    x_u = (m.chest + ease) / 4
+    x_u = max((m.chest + ease) / 4, x_s + 0.03)  # (broad shoulders over a narrow chest: the armhole still slopes out)
     depth, width = _neck(design, m)
     x_n = min(m.neck / (2 * math.pi) + 0.01 + width, x_s - 0.03)
     hem_y = min(hem_y, y_u - 0.12)
