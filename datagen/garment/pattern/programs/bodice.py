@@ -3,9 +3,10 @@ and the set-in sleeves that fit their armholes.
 
 Drafted flat in the T-pose's frontal plane (panel x = the body's X on a front panel, y = height
 above the floor): the neck side point at the neck's radius plus the neckline's width, the shoulder
-point at about half the shoulder width, the underarm point at a quarter of the chest girth plus
+point over the body's, the underarm point at a quarter of the chest girth plus
 ease, the side seam down through the waist and hip at a quarter of the girth there plus ease (as
 tight as the design's ``fit`` asks, never tighter than the body), the hem at the design's length.
+The shoulder and bust points are the body's measured landmarks (``shoulder_x``, ``bust_x``).
 
 Sleeves: the arm is horizontal in the rest pose, so a sleeve's front and back halves lie in the
 bodice's planes and their cap is the armhole's own curve (the same length by construction); the
@@ -46,8 +47,8 @@ BACK_NECK_DROP = 0.02
 """Depth [m] of the back neckline below the neck side points."""
 HAND_GIRTH_FACTOR = 1.45
 """A sleeve's end (without a cuff opening) is at least this many wrist girths around (a hand passes)."""
-SHOULDER_FACTOR = 0.46
-"""The shoulder point is this share of the shoulder width (measured across the back) from the middle."""
+DART_SHORT = 0.02
+"""A bust dart's point stops this far [m] short of the bust point."""
 
 
 def neckline_space(options=tuple(NECKLINES)) -> DesignSpace:
@@ -112,7 +113,7 @@ def bodice_fit(design, m: BodyMeasurements, frame: Frame, *, hem_y: float, ease:
     """Landmarks of a bodice on ``m``: girth ``ease`` [m] added, ``fit`` from 0 (boxy below the
     chest) to 1 (following the body), hem at ``hem_y`` [m above the floor]."""
     y_ns = m.shoulder_height + 0.5 * (m.neck_height - m.shoulder_height)
-    x_s = SHOULDER_FACTOR * m.shoulder_width
+    x_s = m.shoulder_x
     y_s = m.shoulder_height - 0.01
     if sleeves:
         depth = max(0.4 * m.armhole, (m.upper_arm + 0.06) / 2)
@@ -137,7 +138,7 @@ def bodice_fit(design, m: BodyMeasurements, frame: Frame, *, hem_y: float, ease:
     y_cf = min(y_cf, y_ns - 0.005)
     return BodiceFit(neck_x=x_n, neck_y=y_ns, front_neck_y=y_cf, back_neck_y=y_ns - BACK_NECK_DROP,
                      shoulder=(x_s, y_s), underarm=(x_u, y_u), side=tuple(side), dart_intake=intake,
-                     bust_x=m.chest / 10 + 0.02, chest=4 * x_u, frame=frame)
+                     bust_x=m.bust_x + DART_SHORT, chest=4 * x_u, frame=frame)
 
 
 def armhole_curve(b: BodiceFit) -> Cubic:
