@@ -207,3 +207,10 @@ def test_design_count_follows_the_declared_spaces():
     assert sum(counts.values()) >= 1000
     coarse = count_designs(coarse=True)
     assert all(coarse[k] <= counts[k] for k in counts)
+
+
+def test_counting_some_ranges_only():
+    lengths = count_designs(ranges=("length",))
+    # skirt_circle's choices (band or not x 2 or 4 panels) times its 15 lengths
+    assert lengths["skirt_circle"] == 2 * 2 * 15
+    assert count_designs(coarse=True)["skirt_circle"] == 4 <= lengths["skirt_circle"] <= count_designs()["skirt_circle"]

@@ -113,23 +113,26 @@ def make_pattern(name: str, seed: int, measurements: BodyMeasurements, **overrid
     return _program_named(name).build(design, measurements)
 
 
-def count_designs(coarse: bool = False) -> dict[str, int]:
+def count_designs(coarse: bool = False, ranges=None) -> dict[str, int]:
     """Visibly distinct designs per program, from the declared spaces (:meth:`DesignSpace.count`).
-    ``coarse``: count the discrete choices only (every continuous range as one bin)."""
+    ``coarse``: count the discrete choices only (every continuous range one bin); ``ranges``: count
+    the bins of these ranges only (names), the others one bin each."""
+    keep = set() if coarse else (None if ranges is None else set(ranges))
     out = {}
     for name, prog in PROGRAMS.items():
         space = prog.space
-        if coarse:
-            space = DesignSpace(tuple(Range(name=p.name, low=p.low, high=p.low, step=1.0, unit=p.unit, doc=p.doc,
-                                            when=p.when) if isinstance(p, Range) else p for p in space.params))
+        if keep is not None:
+            space = DesignSpace(tuple(
+                Range(name=p.name, low=p.low, high=p.low, step=1.0, unit=p.unit, doc=p.doc, when=p.when)
+                if isinstance(p, Range) and p.name not in keep else p for p in space.params))
         out[name] = space.count()
     return out
 
 
-def count_families(coarse: bool = False) -> dict[str, int]:
+def count_families(coarse: bool = False, ranges=None) -> dict[str, int]:
     """:func:`count_designs` summed per family (programs of one family make different designs)."""
     out: dict[str, int] = {}
-    for name, n in count_designs(coarse).items():
+    for name, n in count_designs(coarse, ranges).items():
         fam = PROGRAMS[name].family
         out[fam] = out.get(fam, 0) + n
     return out
