@@ -335,11 +335,9 @@ def _triangulate(points: np.ndarray, nb: int) -> np.ndarray:
     if missing.any():
         tri = _recover_segments(tri, allp, seg[missing])
     tri = tri[(tri < len(points)).all(axis=1)]
+    # every outline segment is an edge now, so no triangle straddles the outline: its centroid decides
     centroid = allp[tri].mean(axis=1)
-    keep = _inside(poly, centroid)
-    # a triangle of three boundary points can have its centroid inside while lying on a concave notch
-    # only if the outline is not recovered; all segments are edges now, so the centroid decides
-    return tri[keep]
+    return tri[_inside(poly, centroid)]
 
 
 def triangulate_polygon(boundary: np.ndarray, h: float, grain=(0.0, 1.0)) -> tuple[np.ndarray, np.ndarray]:
