@@ -9,6 +9,11 @@ measurements and ease is added to girths, so one design fits every body.
 :func:`make_pattern` is the entry point: ``make_pattern("skirt_circle", 3, measurements,
 fullness=1.0)``. :func:`count_designs` counts the visibly distinct designs of every program from
 their declared spaces (docs/patterns.md, "Design space").
+
+Modules: :mod:`.space` (parameters, draws, counting), :mod:`.fit` (girth profiles, placement
+frame), :mod:`.outline` (named edges, mirrored halves, panels, stitches), :mod:`.bands`
+(waistbands, cuffs, stand collars), :mod:`.skirts`, :mod:`.trousers`, :mod:`.bodice` (bodices and
+set-in sleeves), :mod:`.collars` (collars and hoods), :mod:`.garments` (tops, dresses, jackets).
 """
 
 from __future__ import annotations

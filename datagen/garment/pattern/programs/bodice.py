@@ -27,6 +27,7 @@ import numpy as np
 
 from datagen.body.measurements import BodyMeasurements
 from datagen.garment.pattern.model import Cubic, Quadratic, Stitch
+from datagen.garment.pattern.programs.bands import band
 from datagen.garment.pattern.programs.fit import Frame, arm_girth, torso_girth, torso_half_depth
 from datagen.garment.pattern.programs.outline import Piece, Seg, mirror, piece, seam, shift
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
@@ -239,8 +240,6 @@ def sleeves(b: BodiceFit, design, m: BodyMeasurements, fronts: dict[str, tuple[P
 
     ``fronts``/``backs`` map "left"/"right" to the bodice panel holding that arm's front/back
     armhole and the armhole's side ("+"/"-") on it."""
-    from datagen.garment.pattern.programs.skirts import band
-
     (x_s, y_s), (x_u, y_u) = b.shoulder, b.underarm
     top_len = max(float(design["sleeve_length"]) * m.arm_length, (x_u - x_s) + 0.03)
     x_c = x_s + top_len

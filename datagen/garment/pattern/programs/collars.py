@@ -19,7 +19,7 @@ from datagen.garment.pattern.model import Arc, Cubic, Stitch
 from datagen.body.measurements import BodyMeasurements
 from datagen.garment.pattern.programs.bodice import BodiceFit
 from datagen.garment.pattern.programs.outline import Piece, Seg, mirror, piece, seam
-from datagen.garment.pattern.programs.skirts import Target, band
+from datagen.garment.pattern.programs.bands import Target, band
 
 __all__ = ["COLLAR_ANGLES", "hood", "ring_collar", "strip_collar"]
 

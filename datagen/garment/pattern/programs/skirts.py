@@ -13,19 +13,15 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-import numpy as np
-
 from datagen.body.measurements import BodyMeasurements
 from datagen.garment.pattern.model import Arc, Quadratic, Stitch
 from datagen.garment.pattern.programs.fit import frame, torso_girth, torso_half_depth
+from datagen.garment.pattern.programs.bands import Target, band
 from datagen.garment.pattern.programs.outline import Piece, Seg, mirror, piece, seam
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
 
-__all__ = ["SkirtFit", "SkirtParts", "band", "skirt_fit", "skirt_parts", "SKIRT_SPACES", "SKIRT_LENGTH",
-           "WAIST_SPACE"]
-
-Target = tuple[Piece, list[str]]
-
+__all__ = ["SKIRT_LENGTH", "SKIRT_SPACES", "SkirtFit", "SkirtParts", "WAIST_SPACE", "skirt_fit", "skirt_parts",
+           "waistband"]
 
 @dataclass(frozen=True, kw_only=True)
 class SkirtFit:
@@ -109,7 +105,7 @@ def skirt_fit(m: BodyMeasurements, design) -> SkirtFit:
 
 
 def _fitted_half(fit: SkirtFit, quarter_waist: float, quarter_hip: float, quarter_hem: float, darts: bool,
-                 dart_length: float, hem_ratio_top: float | None = None) -> tuple[list[Seg], tuple]:
+                 dart_length: float) -> tuple[list[Seg], tuple]:
     """Right half of a front/back skirt panel, bottom centre to top centre; (segments, end point)."""
     q = max(quarter_hip - quarter_waist, 0.0)
     intake = 0.5 * q if darts and q >= 0.02 else 0.0
@@ -276,42 +272,6 @@ def skirt_parts(kind: str, design, fit: SkirtFit) -> SkirtParts:
         return _gored(fit, int(design["gores"]), float(design["flare"]), godets,
                       float(design.get("godet_height", 0.0)), float(design.get("godet_width", 0.0)))
     raise ValueError(kind)
-
-
-def band(name: str, targets: list[Target], height: float, *, top_group: str, translation=None,
-         rotation=None, stitch_ease: float = 0.0) -> tuple[Piece, list[Stitch]]:
-    """A straight band (waistband, cuff or stand collar) whose bottom edge is sewn, piece by piece,
-    to ``targets`` in the band's order (left to right seen from outside); its ends are ``end-``
-    (left) and ``end+`` (right), its top edge is in group ``top_group``. Placed as given, or else
-    flat over the first target's panel 1 cm outside it, its left end on that target's last point."""
-    lengths = [p.length(*names) for p, names in targets]
-    if translation is None:
-        translation, rotation = _along(*targets[0])
-    xs = np.concatenate([[0.0], np.cumsum(lengths)])
-    segs = [Seg((float(xs[k]), 0.0), None, f"bottom{k}", "seam") for k in range(len(targets))]
-    segs += [Seg((float(xs[-1]), 0.0), None, "end+"), Seg((float(xs[-1]), height), None, "top", top_group),
-             Seg((0.0, height), None, "end-")]
-    b = piece(name, segs, translation=translation, rotation=rotation, grain=(1.0, 0.0))
-    return b, [seam(b, [f"bottom{k}"], p, names, ease=stitch_ease) for k, (p, names) in enumerate(targets)]
-
-
-def _along(target: Piece, names: list[str]) -> tuple[tuple, tuple]:
-    """Placement (translation, XYZ Euler degrees) of a band sewn to ``names`` of ``target``: in the
-    target panel's plane 1 cm outside it, its x axis running from the target run's last point back
-    to its first (a band sewn right sides out runs opposite to what it is sewn to)."""
-    from scipy.spatial.transform import Rotation
-
-    p = target.panel
-    first = p.vertices[p.edges[target.index[names[0]]].start]
-    last = p.vertices[p.edges[target.index[names[-1]]].end]
-    a, b = p.to_3d(np.asarray([first, last]))
-    normal = p.matrix()[:, 2]
-    x = a - b
-    x = x - normal * float(x @ normal)
-    x /= np.linalg.norm(x)
-    r = np.stack([x, np.cross(normal, x), normal], axis=1)
-    angles = Rotation.from_matrix(r).as_euler("xyz", degrees=True)
-    return tuple(float(v) for v in b + 0.01 * normal), tuple(float(v) for v in angles)
 
 
 def waistband(parts: SkirtParts, fit: SkirtFit, width: float) -> tuple[list[Piece], list[Stitch]]:

@@ -16,9 +16,9 @@ import math
 
 from datagen.body.measurements import BodyMeasurements
 from datagen.garment.pattern.model import Pattern, Quadratic
+from datagen.garment.pattern.programs.bands import band
 from datagen.garment.pattern.programs.fit import frame, leg_girth, torso_girth, torso_half_depth
 from datagen.garment.pattern.programs.outline import Seg, mirror, piece, seam
-from datagen.garment.pattern.programs.skirts import band
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
 
 __all__ = ["SHORTS_SPACE", "TROUSERS_SPACE", "build_trousers"]
