@@ -28,7 +28,7 @@ import numpy as np
 from datagen.body.measurements import BodyMeasurements
 from datagen.garment.pattern.model import Cubic, Quadratic, Stitch
 from datagen.garment.pattern.programs.bands import band
-from datagen.garment.pattern.programs.fit import Frame, arm_girth, torso_girth, torso_half_depth
+from datagen.garment.pattern.programs.fit import Frame, arm_girth, ring_radius, torso_girth
 from datagen.garment.pattern.programs.outline import Piece, Seg, mirror, piece, seam, shift
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
 
@@ -197,7 +197,7 @@ def bodice(b: BodiceFit, neckline: str, *, name: str, front: bool, open_front: f
     else:
         y_c = b.back_neck_y
         segs.append(Seg(n, Quadratic(control=(b.neck_x, y_c)), "neck+", "neckline"))
-    d = torso_half_depth(b.chest)
+    d = ring_radius(b.chest)
     f = b.frame
     if front:
         place = {"translation": (0.0, f.floor_y, f.centre_z + d)}

@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from datagen.body.measurements import BodyMeasurements
 from datagen.garment.pattern.model import Arc, Quadratic, Stitch
-from datagen.garment.pattern.programs.fit import frame, torso_girth, torso_half_depth
+from datagen.garment.pattern.programs.fit import frame, ring_radius, torso_girth
 from datagen.garment.pattern.programs.bands import Target, band
 from datagen.garment.pattern.programs.outline import Piece, Seg, mirror, piece, seam
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
@@ -144,7 +144,7 @@ def _front_back(fit: SkirtFit, hem_girth: float, darts: bool, vent: float | None
     half, end = _fitted_half(fit, fit.waist / 4, fit.hip / 4, hem_girth / 4, darts, 0.09)
     back_half, back_end = _fitted_half(fit, fit.waist / 4, fit.hip / 4, hem_girth / 4, darts, 0.12)
     other, _ = mirror(half, end)
-    d = torso_half_depth(fit.hip)
+    d = ring_radius(fit.hip)
     front = piece("skirt_front", half + other, translation=(0.0, fit.floor_y, fit.centre_z + d))
     back_rot = (0.0, 180.0, 0.0)
     back_t = (0.0, fit.floor_y, fit.centre_z - d)
@@ -207,7 +207,7 @@ def _circle(fit: SkirtFit, fullness: float, n: int) -> SkirtParts:
             Seg((r * s, -r * c), Arc(radius=r, large_arc=False, right=False), "waist+", "waist")]
     other, _ = mirror(segs, (0.0, -r))
     angles = _around(n)
-    d = torso_half_depth(fit.hip)
+    d = ring_radius(fit.hip)
     pieces = []
     for k, a in enumerate(angles):
         t = math.radians(a)
@@ -236,7 +236,7 @@ def _gored(fit: SkirtFit, n: int, flare: float, godets: bool, gh: float, gw: flo
              Seg((gw_x, yw), None, "waist+", "waist")]
     other, _ = mirror(segs, (0.0, yw))
     angles = _around(n)
-    d = torso_half_depth(fit.hip)
+    d = ring_radius(fit.hip)
     pieces = []
     for k, a in enumerate(angles):
         t = math.radians(a)
@@ -276,7 +276,7 @@ def skirt_parts(kind: str, design, fit: SkirtFit) -> SkirtParts:
 
 def waistband(parts: SkirtParts, fit: SkirtFit, width: float) -> tuple[list[Piece], list[Stitch]]:
     """Front and back halves of a waistband on a skirt's waist, joined at the sides."""
-    d = torso_half_depth(fit.waist)
+    d = ring_radius(fit.waist)
     lf = sum(p.length(*n) for p, n in parts.front_top)
     lb = sum(p.length(*n) for p, n in parts.back_top)
     front, s1 = band("waistband_front", parts.front_top, width, top_group="waist", rotation=(0.0, 0.0, 0.0),

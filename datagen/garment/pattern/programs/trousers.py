@@ -17,7 +17,7 @@ import math
 from datagen.body.measurements import BodyMeasurements
 from datagen.garment.pattern.model import Pattern, Quadratic
 from datagen.garment.pattern.programs.bands import band
-from datagen.garment.pattern.programs.fit import frame, leg_girth, torso_girth, torso_half_depth
+from datagen.garment.pattern.programs.fit import frame, leg_girth, ring_radius, torso_girth
 from datagen.garment.pattern.programs.outline import Seg, mirror, piece, seam
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
 
@@ -110,7 +110,7 @@ def build_trousers(design, m: BodyMeasurements, name: str) -> Pattern:
             + [Seg((wf + delta, yw), None, "waist", "waist"), Seg((0.02, yw + BACK_RAISE), None, "cb_hi", "crotch"),
                Seg((0.0, yhc), Quadratic(control=(0.0, ycb)), "cb_lo", "crotch"), Seg(cb, None, "inseam", "inseam")])
 
-    dz = torso_half_depth(hip)
+    dz = ring_radius(hip)
     tf = (0.0, f.floor_y, f.centre_z + dz)
     tb = (0.0, f.floor_y, f.centre_z - dz)
     back_rot = (0.0, 180.0, 0.0)
