@@ -26,10 +26,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from datagen.body.measurements import BodyMeasurements
-from datagen.garment.pattern.model import Cubic, Quadratic, Stitch
+from datagen.garment.pattern.model import Cubic, Quadratic, Stitch, euler_xyz_matrix
 from datagen.garment.pattern.programs.bands import band
 from datagen.garment.pattern.programs.fit import Frame, arm_girth, ring_radius, torso_girth
-from datagen.garment.pattern.programs.outline import Piece, Seg, mirror, piece, seam, shift
+from datagen.garment.pattern.programs.outline import Piece, Seg, mirror, piece, seam, shift, turn
 from datagen.garment.pattern.programs.space import Choice, DesignSpace, Range
 
 __all__ = ["BodiceFit", "NECKLINES", "bodice", "bodice_fit", "neckline_space", "sleeve_space", "sleeves"]
@@ -234,6 +234,17 @@ def side_stitches(front: Piece, back: Piece, front_side: str, back_side: str) ->
     return [seam(front, [f"side_top{fs}"], back, [f"side_top{bs}"]), seam(front, f_low, back, b_low)]
 
 
+def _euler(r: np.ndarray) -> tuple[float, float, float]:
+    from scipy.spatial.transform import Rotation
+
+    return tuple(float(a) for a in Rotation.from_matrix(r).as_euler("xyz", degrees=True))
+
+
+_FRONT_SLEEVE = _euler(euler_xyz_matrix((0.0, 0.0, -90.0)))
+_BACK_SLEEVE = _euler(euler_xyz_matrix((0.0, 180.0, 0.0)) @ euler_xyz_matrix((0.0, 0.0, -90.0)))
+"""Rotations (XYZ Euler, degrees) of a sleeve's front and back halves, drawn turned a quarter."""
+
+
 def sleeves(b: BodiceFit, design, m: BodyMeasurements, fronts: dict[str, tuple[Piece, str]],
             backs: dict[str, tuple[Piece, str]]) -> tuple[list[Piece], list[Stitch]]:
     """Set-in sleeves (front and back halves per arm, and cuffs) sewn into the armholes.
@@ -252,18 +263,21 @@ def sleeves(b: BodiceFit, design, m: BodyMeasurements, fronts: dict[str, tuple[P
     segs = [Seg((x_s, y_s), cap, "cap", "armhole"), Seg((x_u, y_u), None, "under"),
             Seg((x_c, y_a - girth / 4), None, "end", "cuff"), Seg((x_c, y_a + girth / 4), None, "top")]
     mirrored, _ = mirror(segs, (x_s, y_s))
+    # turned a quarter so that the arm runs along panel y (the axis a wrapped panel bends round):
+    # placed with Rz(-90) first, the halves land where they were drawn
+    segs, mirrored = turn(segs), turn(mirrored)
     f = b.frame
-    dz = m.upper_arm / (2 * math.pi) + 0.04
+    dz = ring_radius(0.5 * (2 * (y_s - y_u) + girth))  # the sleeve's mean girth round the arm
     front_t = (0.0, f.floor_y, f.centre_z + dz)
     back_t = (0.0, f.floor_y, f.centre_z - dz)
-    rot = (0.0, 180.0, 0.0)
     pieces, stitches = [], []
     for arm in ("left", "right"):
-        # the body-left arm's front half is drawn as is; its back half, seen from behind, mirrored
+        # the body-left arm's front half is drawn as is; its back half, seen from behind, mirrored;
         # the grain runs along the arm
-        sf = piece(f"sleeve_{arm}_front", segs if arm == "left" else mirrored, translation=front_t, grain=(1.0, 0.0))
-        sb = piece(f"sleeve_{arm}_back", mirrored if arm == "left" else segs, translation=back_t, rotation=rot,
-                   grain=(1.0, 0.0))
+        sf = piece(f"sleeve_{arm}_front", segs if arm == "left" else mirrored, translation=front_t,
+                   rotation=_FRONT_SLEEVE, grain=(0.0, 1.0))
+        sb = piece(f"sleeve_{arm}_back", mirrored if arm == "left" else segs, translation=back_t,
+                   rotation=_BACK_SLEEVE, grain=(0.0, 1.0))
         (fp, fside), (bp, bside) = fronts[arm], backs[arm]
         stitches += [seam(sf, ["top"], sb, ["top"]), seam(sf, ["under"], sb, ["under"]),
                      seam(fp, [f"armhole{fside}"], sf, ["cap"]), seam(bp, [f"armhole{bside}"], sb, ["cap"])]

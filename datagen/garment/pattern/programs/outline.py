@@ -21,7 +21,7 @@ import numpy as np
 
 from datagen.garment.pattern.model import Arc, Cubic, Edge, Panel, Quadratic, SeamSide, Stitch
 
-__all__ = ["Piece", "Seg", "curve_length", "mirror", "mirrored_name", "piece", "seam", "shift", "straight"]
+__all__ = ["Piece", "Seg", "curve_length", "mirror", "mirrored_name", "piece", "seam", "shift", "straight", "turn"]
 
 P = tuple[float, float]
 
@@ -87,6 +87,23 @@ def shift(segs: Sequence[Seg], dx: float = 0.0, dy: float = 0.0) -> list[Seg]:
         elif isinstance(c, Cubic):
             c = Cubic(control1=mv(c.control1), control2=mv(c.control2))
         out.append(Seg(mv(s.start), c, s.name, s.group))
+    return out
+
+
+def turn(segs: Sequence[Seg]) -> list[Seg]:
+    """``segs`` turned a quarter counter-clockwise in panel space ((x, y) -> (-y, x)); a panel so
+    turned is placed as before with ``Rz(-90 degrees)`` applied first."""
+    def q(p):
+        return (-float(p[1]), float(p[0]))
+
+    out = []
+    for s in segs:
+        c = s.curve
+        if isinstance(c, Quadratic):
+            c = Quadratic(control=q(c.control))
+        elif isinstance(c, Cubic):
+            c = Cubic(control1=q(c.control1), control2=q(c.control2))
+        out.append(Seg(q(s.start), c, s.name, s.group))
     return out
 
 
