@@ -22,19 +22,33 @@ def register(sub, formatter) -> None:
     p.add_argument("--json", action="store_true", help="print machine-readable JSON")
     p.set_defaults(func=_cmd_list)
     p = gsub.add_parser("make", formatter_class=formatter, help="build one garment on a body and check it",
-                        description="Build a garment of a type, styled by a seed, on a body shape in its rest pose; "
-                        "every check runs and its figures are printed. .obj/.ply hold the mesh, .npz everything "
-                        "(labels, UVs, material, metadata).",
+                        description="Build a garment on a body shape in its rest pose, of a procedural type (--type, "
+                        "an offset shell) or from a sewing pattern (--pattern, a program fitted to the body's "
+                        "measurements; --spec, a GarmentCode specification JSON): flat panels meshed and placed "
+                        "around the body, to be sewn by the simulator. Every check runs and its figures are printed. "
+                        ".obj/.ply hold the mesh, .npz everything (labels, UVs, material, metadata; for a pattern "
+                        "also the flat rest coordinates, stitches, grain and the pattern).",
                         epilog="examples:\n  drape garment make --type dress --seed 4 --body regular --out dress.obj\n"
-                        "  drape garment make --type pants --param hem=0.05 --material denim --out pants.npz --show pants.png")
-    p.add_argument("--type", required=True, help="a type from `drape garment list`")
-    p.add_argument("--seed", type=int, default=0, help="draws the style parameters")
+                        "  drape garment make --type pants --param hem=0.05 --material denim --out pants.npz --show pants.png\n"
+                        "  drape garment make --pattern skirt_circle --seed 3 --body fat --out skirt.npz --svg skirt.svg\n"
+                        "  drape garment make --spec shirt_specification.json --body thin --out shirt.npz")
+    src = p.add_mutually_exclusive_group(required=True)
+    src.add_argument("--type", help="a procedural type from `drape garment list`")
+    src.add_argument("--pattern", help="a pattern program from `drape garment list`")
+    src.add_argument("--spec", help="a GarmentCode specification JSON (GarmentCode's frame stands on the floor; "
+                     "files drape wrote are in drape's)")
+    p.add_argument("--seed", type=int, default=0, help="draws the style parameters (the design of a --pattern)")
     p.add_argument("--body", default="regular", help="body shape preset: thin, regular, fat")
     p.add_argument("--edge-length", type=float, default=None, help="target edge length (m); default the type's")
     p.add_argument("--material", help="material preset (default: the type's)")
-    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE", help="fix a style parameter (repeatable)")
+    p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
+                   help="fix a style parameter, or a design parameter of a --pattern (repeatable)")
+    p.add_argument("--placement", choices=("wrap", "flat"), default="wrap",
+                   help="pattern panels bent around the body (wrap) or flat where the pattern puts them")
     p.add_argument("--out", required=True, help="output file (.obj, .ply or .npz)")
     p.add_argument("--show", help="also render the garment on the body, front and side, to this PNG")
+    p.add_argument("--svg", help="--pattern/--spec: draw the panels with their stitches numbered (.svg, or .png)")
+    p.add_argument("--write-spec", help="--pattern/--spec: also write the pattern as GarmentCode specification JSON")
     p.set_defaults(func=_cmd_make)
 
 
@@ -48,12 +62,47 @@ def _cmd_list(args) -> int:
                               "params": {n: {"low": s.low, "high": s.high, "doc": s.doc} for n, s in v.params.items()}}
                           for k, v in GARMENT_TYPES.items()}, indent=2))
         return 0
+    from datagen.garment.pattern.programs import PROGRAMS
+
+    print("procedural types (offset shells of the body): --type NAME")
     for k, v in GARMENT_TYPES.items():
         print(f"{k} (code {v.code}, material {v.material}, {v.boundary_loops} openings, edge {1000 * v.edge_length:g} mm)")
         for n, s in v.params.items():
             print(f"    {n:14s} [{s.low:g}, {s.high:g}]  {s.doc}")
+    print("\nsewing-pattern programs (flat panels fitted to the body's measurements): --pattern NAME")
+    for k, prog in PROGRAMS.items():
+        print(f"{k} ({prog.family}): {prog.doc}")
+        for par in prog.space.params:
+            print(f"    {_describe_param(par)}")
     print("materials: " + ", ".join(MATERIALS))
     return 0
+
+
+def _describe_param(par) -> str:
+    when = getattr(par, "when", None)
+    when = "  (when " + ", ".join(f"{k} in {'|'.join(map(str, v))}" for k, v in when.items()) + ")" if when else ""
+    if hasattr(par, "options"):
+        return f"{par.name:18s} {' | '.join(map(str, par.options))}  {par.doc}{when}"
+    return f"{par.name:18s} [{par.low:g}, {par.high:g}] {getattr(par, 'unit', '') or ''}  {par.doc}{when}"
+
+
+def _pattern_params(items: list[str]) -> dict:
+    """``--param NAME=VALUE`` for a pattern's design: numbers, true/false, or words."""
+    out: dict = {}
+    for item in items:
+        name, sep, value = item.partition("=")
+        if not sep or not name:
+            raise InputError(f"--param {item!r}: write it as NAME=VALUE, e.g. --param neckline=v")
+        value = value.strip()
+        if value.lower() in ("true", "false"):
+            out[name.strip()] = value.lower() == "true"
+            continue
+        try:
+            num = float(value)
+            out[name.strip()] = int(num) if num.is_integer() and "." not in value else num
+        except ValueError:
+            out[name.strip()] = value
+    return out
 
 
 def _cmd_make(args) -> int:
@@ -81,6 +130,11 @@ def _cmd_make(args) -> int:
                          f"{args.edge_length:g}")
     if args.seed < 0:
         raise InputError(f"--seed must be 0 or more, got {args.seed}")
+    if args.type is None:
+        return _make_pattern(args, out)
+    for flag in ("svg", "write_spec"):
+        if getattr(args, flag):
+            raise InputError(f"--{flag.replace('_', '-')} draws or writes a sewing pattern: use it with --pattern or --spec")
     garment_type(args.type)  # an unknown type or material is refused before the body is loaded
     if args.material:
         material(args.material)
@@ -112,5 +166,86 @@ def _cmd_make(args) -> int:
         from datagen.garment.render import render_garment
 
         render_garment(garment, np.asarray(model.shaped(betas))[0], model.faces, args.show)
+        print(f"wrote {args.show}")
+    return 0
+
+
+def _make_pattern(args, out: Path) -> int:
+    import numpy as np
+
+    from datagen.body.cache import default_body
+    from datagen.body.shapes import resolve_betas
+    from datagen.garment.pattern.garment import check_pattern_garment, pattern_garment, stand_on_floor
+    from datagen.garment.pattern.mesh import MIN_EDGE_LENGTH
+    from datagen.materials import material
+
+    for flag, value in (("--svg", args.svg), ("--write-spec", args.write_spec)):
+        if value and not Path(value).parent.is_dir():
+            raise InputError(f"{flag} {value}: the folder {Path(value).parent} does not exist; create it first")
+    if args.svg and Path(args.svg).suffix.lower() not in (".svg", ".png"):
+        raise InputError(f"--svg {args.svg}: write .svg or .png")
+    edge = 0.02 if args.edge_length is None else args.edge_length
+    if not MIN_EDGE_LENGTH <= edge <= 0.1:
+        raise InputError(f"--edge-length must be between {MIN_EDGE_LENGTH} and 0.1 m for a pattern, got {edge:g}")
+    if args.material:
+        material(args.material)
+    overrides = _pattern_params(args.param)
+    if args.spec and overrides:
+        raise InputError("--param sets a program's design parameters; a --spec file has its own geometry")
+    if args.pattern:
+        from datagen.garment.pattern.programs import PROGRAMS, design_of
+
+        if args.pattern not in PROGRAMS:
+            raise InputError(f"--pattern {args.pattern!r} is not a pattern program; `drape garment list` shows them: "
+                             f"{', '.join(PROGRAMS)}")
+        design_of(args.pattern, args.seed, **overrides)  # a bad override is refused before the body is loaded
+    else:
+        from datagen.garment.pattern.spec import read_spec, spec_frame
+
+        pattern = read_spec(args.spec)
+    model = default_body()
+    betas = resolve_betas(model, body=args.body)[0]
+    body_v = np.asarray(model.shaped(betas))[0]
+    body_f = np.asarray(model.faces)
+    if args.pattern:
+        from datagen.body.measurements import measure_body
+        from datagen.garment.pattern.programs import make_pattern
+
+        pattern = make_pattern(args.pattern, args.seed, measure_body(model, betas), **overrides)
+        label = f"{args.pattern} seed {args.seed}"
+    else:
+        if spec_frame(args.spec) == "garmentcode":
+            pattern = stand_on_floor(pattern, body_v)
+            print(f"{args.spec}: GarmentCode's frame (standing on y = 0): moved down to the body's floor")
+        label = f"{pattern.name} from {args.spec}"
+    garment = pattern_garment(pattern, body_v, body_f, edge_length=edge, mode=args.placement,
+                              material_name=args.material, seed=args.seed if args.pattern else None, betas=betas)
+    c = check_pattern_garment(garment, body_v, body_f)
+    if not c["ok"]:
+        raise InputError(f"the {label} ({garment.metadata.vertex_count} vertices) fails its checks: "
+                         f"{'; '.join(c['failures'])}; nothing was written. Try another --edge-length or --seed")
+    garment.save(out)
+    m = garment.metadata
+    print(f"wrote {out}: {label} on {args.body}: {len(pattern.panels)} panels, {len(pattern.stitches)} stitches, "
+          f"{m.vertex_count} vertices, {m.face_count} faces, {m.rest_area_m2:.2f} m², openings "
+          f"{', '.join(garment.loops)}, material {garment.material.name} ({m.build_seconds:.1f} s)")
+    print(f"checks: ok; min angle {c['min_angle_deg']:.1f}° (1st percentile {c['angle_p1_deg']:.1f}°), edge spread "
+          f"{c['edge_spread']:.2f}, longest edge {c['edge_max_ratio']:.2f} x median, clearance "
+          f"{c['min_clearance'] * 1000:.1f} mm, {c['stitch_pairs']} sewn pairs {c['stitch_gap_mean'] * 100:.1f} cm apart "
+          f"on average ({args.placement} placement)")
+    if args.svg:
+        from datagen.garment.pattern.svg import draw_svg
+
+        draw_svg(pattern, args.svg)
+        print(f"wrote {args.svg}")
+    if args.write_spec:
+        from datagen.garment.pattern.spec import write_spec
+
+        write_spec(pattern, args.write_spec)
+        print(f"wrote {args.write_spec}")
+    if args.show:
+        from datagen.garment.render import render_garment
+
+        render_garment(garment, body_v, body_f, args.show)
         print(f"wrote {args.show}")
     return 0

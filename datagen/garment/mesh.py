@@ -64,6 +64,18 @@ class GarmentMesh:
             a sleeve's chart wraps at its underarm seam; :meth:`material_frames` gives the
             directions. The rest metric is the 3D rest shape; the UVs give directions and
             approximate lengths (u is an angle times the panel's mean radius).
+
+    A garment of the **pattern** kind (:mod:`datagen.garment.pattern`, ``kind == "pattern"``) is
+    made of flat panels that are not welded: its rest state is flat cloth, ``vertices`` are the
+    start positions around the body, and these are set as well (None for the shell kind):
+
+        rest_uv: each vertex's 2D coordinate in its panel [V, 2] [m] (the flat rest state);
+            ``vertex_region`` is its panel (``panel_id``), ``region_names`` the panel names;
+            ``uv`` is ``rest_uv`` turned into the panel's (weft, warp) grain frame.
+        stitch_pairs: vertex pairs to be sewn together [P, 2] (int64).
+        face_grain: the warp direction of every face in its panel's 2D frame [F, 2] (unit).
+        pattern: the sewing pattern it came from, as GarmentCode specification JSON text
+            (:func:`datagen.garment.pattern.spec.read_spec` reads it back).
     """
 
     vertices: np.ndarray
@@ -77,6 +89,10 @@ class GarmentMesh:
     material: Material
     metadata: GarmentMetadata = field(default_factory=GarmentMetadata)
     face_uv: np.ndarray | None = None
+    rest_uv: np.ndarray | None = None
+    stitch_pairs: np.ndarray | None = None
+    face_grain: np.ndarray | None = None
+    pattern: str | None = None
 
     def __post_init__(self):
         if not isinstance(self.metadata, GarmentMetadata):
@@ -84,13 +100,17 @@ class GarmentMesh:
 
     @classmethod
     def create(cls, vertices, faces, *, uv, vertex_region, region_names, material, metadata, face_uv=None,
-               extra_seam=None) -> GarmentMesh:
+               extra_seam=None, loops=None, rest_uv=None, stitch_pairs=None, face_grain=None,
+               pattern=None) -> GarmentMesh:
         """Derive face regions, seams, named loops and counts, and build the garment.
 
         ``metadata`` is a :class:`GarmentMetadata` (or its dict form) without the counts, which
         are filled in here; its ``type``'s record names the openings. ``face_uv`` [F, 3, 2]
         defaults to the vertices' UVs; ``extra_seam`` [V] marks seams that are not panel borders
-        (a sleeve's underarm seam)."""
+        (a sleeve's underarm seam). ``loops`` (name -> vertex ids) replaces the openings found
+        from the mesh's boundary (a pattern's panels are not welded: their openings come from the
+        free edges); ``rest_uv``, ``stitch_pairs``, ``face_grain`` and ``pattern`` make a garment
+        of the pattern kind (class docstring)."""
         v = np.asarray(vertices, dtype=np.float64)
         f = np.asarray(faces, dtype=np.int64)
         vr = np.asarray(vertex_region, dtype=np.int32)
@@ -105,17 +125,34 @@ class GarmentMesh:
             seam |= np.asarray(extra_seam, dtype=bool)
         if not isinstance(metadata, GarmentMetadata):
             metadata = GarmentMetadata.from_dict(metadata)
-        loops = _name_loops(v, boundary_loops(f), GARMENT_TYPES.get(metadata.type or ""))
+        if loops is None:
+            loops = _name_loops(v, boundary_loops(f), GARMENT_TYPES.get(metadata.type or ""))
+        else:
+            loops = {str(k): np.asarray(x, dtype=np.int64) for k, x in loops.items()}
         area = float(0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=1).sum())
         meta = replace(metadata, vertex_count=len(v), face_count=len(f), rest_area_m2=area, boundary_loops=len(loops),
                        material=material)
         return cls(vertices=v, faces=f, uv=np.asarray(uv, dtype=np.float64), vertex_region=vr, face_region=fr,
                    region_names=tuple(region_names), seam_vertex=seam, loops=loops, material=material, metadata=meta,
-                   face_uv=np.asarray(uv, dtype=np.float64)[f] if face_uv is None else np.asarray(face_uv, dtype=np.float64))
+                   face_uv=np.asarray(uv, dtype=np.float64)[f] if face_uv is None else np.asarray(face_uv, dtype=np.float64),
+                   rest_uv=None if rest_uv is None else np.asarray(rest_uv, dtype=np.float64),
+                   stitch_pairs=None if stitch_pairs is None else np.asarray(stitch_pairs, dtype=np.int64).reshape(-1, 2),
+                   face_grain=None if face_grain is None else np.asarray(face_grain, dtype=np.float64),
+                   pattern=pattern)
 
     @property
     def vertex_count(self) -> int:
         return len(self.vertices)
+
+    @property
+    def kind(self) -> str:
+        """``"pattern"`` for flat panels to be sewn (``rest_uv`` set), ``"shell"`` for a built shell."""
+        return "shell" if self.rest_uv is None else "pattern"
+
+    @property
+    def panel_id(self) -> np.ndarray:
+        """Panel index of every vertex [V] (``vertex_region``)."""
+        return self.vertex_region
 
     def material_frames(self) -> np.ndarray:
         """Unit weft and warp directions of every face [F, 2, 3] (rest shape).
@@ -153,6 +190,14 @@ class GarmentMesh:
             scale[centroid_y >= band.top - band.width] = band.weft_scale
         return scale
 
+    def _pattern_arrays(self) -> dict[str, np.ndarray]:
+        if self.rest_uv is None:
+            return {}
+        return {"rest_uv": self.rest_uv,
+                "stitch_pairs": np.zeros((0, 2), np.int64) if self.stitch_pairs is None else self.stitch_pairs,
+                "face_grain": np.zeros((0, 2)) if self.face_grain is None else self.face_grain,
+                "pattern": np.array(self.pattern or "")}
+
     def save(self, path: str | Path) -> Path:
         """Write ``.obj``/``.ply`` (geometry, via trimesh) or ``.npz`` (everything, no pickles)."""
         path = Path(path)
@@ -170,7 +215,8 @@ class GarmentMesh:
                          face_region=self.face_region, seam_vertex=self.seam_vertex,
                          region_names=np.array(json.dumps(list(self.region_names))),
                          material=np.array(json.dumps(self.material.as_dict())),
-                         metadata=np.array(json.dumps(self.metadata.to_dict())), **loops)
+                         metadata=np.array(json.dumps(self.metadata.to_dict())), **loops,
+                         **self._pattern_arrays())
         else:
             raise InputError(f"{path}: garment files are .obj, .ply or .npz (labels and metadata only in .npz)")
         return path
@@ -193,7 +239,11 @@ def load_garment(path: str | Path) -> GarmentMesh:
                            seam_vertex=d["seam_vertex"], loops=loops,
                            material=Material(**json.loads(str(d["material"]))),
                            metadata=meta,
-                           face_uv=d["face_uv"] if "face_uv" in d.files else None)
+                           face_uv=d["face_uv"] if "face_uv" in d.files else None,
+                           rest_uv=d["rest_uv"] if "rest_uv" in d.files else None,
+                           stitch_pairs=d["stitch_pairs"] if "stitch_pairs" in d.files else None,
+                           face_grain=d["face_grain"] if "face_grain" in d.files else None,
+                           pattern=(str(d["pattern"]) or None) if "pattern" in d.files else None)
 
 
 def _name_loops(v: np.ndarray, loops: list[np.ndarray], garment_type: GarmentType | None = None

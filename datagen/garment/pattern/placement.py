@@ -1,0 +1,155 @@
+"""Placing a flat pattern mesh around the body in its rest pose: the simulator's start positions.
+
+Two modes (:func:`place`):
+
+- ``"flat"``: every panel where its pattern puts it, ``R @ [x, y, 0] + translation`` (GarmentCode's
+  and the programs' placement), then pushed out of the body.
+- ``"wrap"`` (default): each flat panel is first bent, without stretching, around an axis along its
+  own y direction through the middle of the body behind it (a cylinder of the panel's distance to
+  that axis; wider, with the axis moved back, for a panel that would turn more than 99 degrees either
+  side), so a front and a back panel meet at the sides; then pushed out of the body. Bending
+  is isometric, so the rest state (the flat panel) is unstrained; the stitched pairs start closer.
+
+Pushing out: a vertex inside the body or closer than ``clearance`` to it moves to the closest body
+point plus ``clearance`` along the outward direction (warp mesh queries, as the garment checks).
+:func:`placement_report` gives the figures that compare the modes (stitch gap, vertices inside).
+"""
+
+from __future__ import annotations
+
+import logging
+from dataclasses import dataclass
+from typing import Literal
+
+import numpy as np
+
+from datagen.errors import InputError
+from datagen.garment.pattern.mesh import FlatPatternMesh
+
+__all__ = ["CLEARANCE", "PlacementReport", "place", "placement_report"]
+
+log = logging.getLogger(__name__)
+
+CLEARANCE = 0.008
+"""Smallest distance [m] between a placed vertex and the body (the procedural garments' MIN_CLEARANCE)."""
+
+Mode = Literal["flat", "wrap"]
+
+_MAX_TURN = 0.55 * np.pi
+"""Largest angle [rad] a wrapped panel turns either side of its middle."""
+
+
+def _flat(mesh: FlatPatternMesh) -> np.ndarray:
+    out = np.zeros((mesh.vertex_count, 3))
+    for pi, panel in enumerate(mesh.pattern.panels):
+        sel = mesh.panel_id == pi
+        out[sel] = panel.to_3d(mesh.rest_uv[sel])
+    return out
+
+
+def _wrap(mesh: FlatPatternMesh, body_vertices: np.ndarray) -> np.ndarray:
+    out = _flat(mesh)
+    for pi, panel in enumerate(mesh.pattern.panels):
+        sel = mesh.panel_id == pi
+        r = panel.matrix()
+        ex, ey, n = r[:, 0], r[:, 1], r[:, 2]
+        origin = np.asarray(panel.translation)
+        pts = out[sel]
+        # the body behind the panel: vertices whose projection along the normal falls on the panel's box
+        rel = body_vertices - origin
+        bx, by, bn = rel @ ex, rel @ ey, rel @ n
+        px, py = (pts - origin) @ ex, (pts - origin) @ ey
+        behind = ((bx > px.min()) & (bx < px.max()) & (by > py.min()) & (by < py.max()) & (bn < 0))
+        if behind.sum() < 10:
+            continue  # nothing behind this panel (a collar above the neck, a far-away piece): leave it flat
+        axis = body_vertices[behind].mean(axis=0)
+        d = float((origin - axis) @ n)
+        if d <= 0.02:
+            continue  # the panel cuts through the body's middle: bending would fold it; the push handles it
+        # a panel wider than half the way around (a circle skirt's) gets a larger radius, the axis
+        # moved back: it turns at most _MAX_TURN either side, so it does not wrap over itself
+        half = float(np.abs((pts - axis) @ ex).max())
+        if half / d > _MAX_TURN:
+            axis = axis - n * (half / _MAX_TURN - d)
+            d = half / _MAX_TURN
+        rel = pts - axis
+        x, y = rel @ ex, rel @ ey
+        theta = x / d
+        out[sel] = axis + y[:, None] * ey + d * (np.cos(theta)[:, None] * n + np.sin(theta)[:, None] * ex)
+    return out
+
+
+def _push_out(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray, clearance: float) -> np.ndarray:
+    from datagen.geometry.queries import mesh_closest_points, mesh_signed_distance, warp_mesh
+
+    body = warp_mesh(body_vertices, body_faces)
+    sd = mesh_signed_distance(body, points, 10.0)
+    close = sd < clearance
+    if not close.any():
+        return points
+    closest = mesh_closest_points(body, points[close], 10.0)
+    away = points[close] - closest
+    dist = np.linalg.norm(away, axis=1, keepdims=True)
+    outward = np.where(sd[close, None] < 0, -away, away) / np.maximum(dist, 1e-12)
+    # a vertex exactly on the surface has no direction: use the body's vertex normal at the closest point
+    flat = dist[:, 0] < 1e-9
+    if flat.any():
+        import trimesh
+
+        tm = trimesh.Trimesh(body_vertices, body_faces, process=False)
+        tri = tm.nearest.on_surface(closest[flat])[2]
+        outward[flat] = tm.face_normals[tri]
+    out = points.copy()
+    out[close] = closest + outward * clearance
+    return out
+
+
+def place(mesh: FlatPatternMesh, body_vertices: np.ndarray, body_faces: np.ndarray, *, mode: Mode = "wrap",
+          clearance: float = CLEARANCE, push: bool = True) -> np.ndarray:
+    """3D start positions [V, 3] [m] of ``mesh``'s vertices around the body (module docstring).
+
+    ``body_vertices`` [Vb, 3] and ``body_faces`` [Fb, 3]: the body in its rest pose, the frame the
+    pattern's translations and rotations are given in. ``push=False`` skips pushing vertices out
+    of the body (to look at the placement itself)."""
+    bv = np.asarray(body_vertices, dtype=np.float64)
+    bf = np.asarray(body_faces, dtype=np.int64)
+    if bv.ndim != 2 or bv.shape[1] != 3 or bf.ndim != 2 or bf.shape[1] != 3:
+        raise InputError(f"the body must be vertices [V, 3] and faces [F, 3], got {bv.shape} and {bf.shape}")
+    if mode == "flat":
+        pts = _flat(mesh)
+    elif mode == "wrap":
+        pts = _wrap(mesh, bv)
+    else:
+        raise InputError(f"placement mode must be 'flat' or 'wrap', got {mode!r}")
+    # two passes: a vertex pushed onto another part of the body (an arm) is pushed again
+    for _ in range(2 if push else 0):
+        pts = _push_out(pts, bv, bf, clearance)
+    return pts
+
+
+@dataclass(frozen=True, kw_only=True)
+class PlacementReport:
+    """How well a placement is set up to be sewn."""
+
+    vertices_inside: int        # vertices inside the body
+    min_clearance: float        # [m], negative inside
+    stitch_gap_mean: float      # mean 3D distance between sewn vertices [m]
+    stitch_gap_max: float       # [m]
+    stretch_max: float          # largest relative change of an edge's length from the flat rest state
+
+
+def placement_report(mesh: FlatPatternMesh, positions: np.ndarray, body_vertices: np.ndarray,
+                     body_faces: np.ndarray) -> PlacementReport:
+    """:class:`PlacementReport` of ``positions`` [V, 3]."""
+    from datagen.geometry.queries import mesh_signed_distance, warp_mesh
+
+    sd = mesh_signed_distance(warp_mesh(np.asarray(body_vertices, float), np.asarray(body_faces)), positions, 10.0)
+    gaps = (np.linalg.norm(positions[mesh.stitch_pairs[:, 0]] - positions[mesh.stitch_pairs[:, 1]], axis=1)
+            if len(mesh.stitch_pairs) else np.zeros(1))
+    e = np.unique(np.sort(np.concatenate([mesh.faces[:, [0, 1]], mesh.faces[:, [1, 2]], mesh.faces[:, [2, 0]]]),
+                          axis=1), axis=0)
+    rest = np.linalg.norm(mesh.rest_uv[e[:, 0]] - mesh.rest_uv[e[:, 1]], axis=1)
+    now = np.linalg.norm(positions[e[:, 0]] - positions[e[:, 1]], axis=1)
+    return PlacementReport(vertices_inside=int((sd < 0).sum()), min_clearance=float(sd.min()),
+                           stitch_gap_mean=float(gaps.mean()), stitch_gap_max=float(gaps.max()),
+                           stretch_max=float(np.abs(now / rest - 1).max()))

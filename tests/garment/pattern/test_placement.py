@@ -1,0 +1,63 @@
+"""Placement around the body: nothing inside it, wrapping isometric and closer to sewn than flat."""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from datagen.errors import InputError
+from datagen.garment.pattern.mesh import mesh_pattern
+from datagen.garment.pattern.placement import CLEARANCE, place, placement_report
+from datagen.garment.pattern.spec import read_spec
+
+SHIRT = Path(__file__).parent / "fixtures" / "garmentcode_hoody_mean_specification.json"
+
+
+@pytest.fixture(scope="module")
+def fat_body(default_body):
+    from datagen.body.shapes import resolve_betas
+
+    betas = resolve_betas(default_body, body="fat")[0]
+    return np.asarray(default_body.shaped(betas))[0], np.asarray(default_body.faces)
+
+
+@pytest.fixture(scope="module")
+def hoody_mesh(fat_body):
+    pat = read_spec(SHIRT)
+    floor = float(fat_body[0][:, 1].min())  # GarmentCode's frame stands on y = 0
+    pat = dataclasses.replace(pat, panels=tuple(
+        dataclasses.replace(p, translation=(p.translation[0], p.translation[1] + floor, p.translation[2]))
+        for p in pat.panels))
+    return mesh_pattern(pat, 0.03)
+
+
+def test_flat_placement_is_the_patterns_own(hoody_mesh, fat_body):
+    pos = place(hoody_mesh, *fat_body, mode="flat")
+    r = placement_report(hoody_mesh, pos, *fat_body)
+    assert r.vertices_inside == 0 and r.min_clearance >= CLEARANCE - 1e-4
+    # away from the body every vertex is exactly where the panel's rotation and translation put it
+    panel = hoody_mesh.pattern.panels[0]
+    sel = hoody_mesh.panel_id == 0
+    ref = panel.to_3d(hoody_mesh.rest_uv[sel])
+    moved = np.linalg.norm(pos[sel] - ref, axis=1) > 1e-9
+    assert moved.mean() < 0.5
+    np.testing.assert_allclose(pos[sel][~moved], ref[~moved])
+
+
+def test_wrap_is_isometric_outside_the_body_and_sews_closer(hoody_mesh, fat_body):
+    flat = placement_report(hoody_mesh, place(hoody_mesh, *fat_body, mode="flat"), *fat_body)
+    wrap = placement_report(hoody_mesh, place(hoody_mesh, *fat_body, mode="wrap"), *fat_body)
+    assert wrap.vertices_inside == 0 and wrap.min_clearance >= CLEARANCE - 1e-4
+    assert wrap.stitch_gap_mean < 0.9 * flat.stitch_gap_mean
+    # bending keeps the flat rest lengths (up to chords of the cylinder); the push out of the fat
+    # body stretches where a panel cut into it
+    bent = placement_report(hoody_mesh, place(hoody_mesh, *fat_body, mode="wrap", push=False), *fat_body)
+    assert bent.stretch_max < 0.01
+
+
+def test_bad_mode_and_body_are_refused(hoody_mesh, fat_body):
+    with pytest.raises(InputError, match="'flat' or 'wrap'"):
+        place(hoody_mesh, *fat_body, mode="drape")
+    with pytest.raises(InputError, match=r"vertices \[V, 3\]"):
+        place(hoody_mesh, fat_body[0][:, :2], fat_body[1])
