@@ -69,7 +69,7 @@ profile_in() {
   if [ -f "$tree/benchmarks/__main__.py" ]; then
     (cd "$tree" && PYTHONPATH="$PWD:$PYTHONPATH" python -m benchmarks sim profile "$@")
   else
-    (cd "$tree" && PYTHONPATH="$PWD:$PYTHONPATH" python benchmarks/bench_sim.py profile "$@")
+    (cd "$tree" && PYTHONPATH="$PWD:$PYTHONPATH" python -m benchmarks sim profile "$@")
   fi
 }
 

@@ -2,7 +2,7 @@
 bodies, each as its flat panels (stitches numbered) beside the panels placed around the body (front
 and side), before any sewing. Writes docs/patterns/gallery_N.png (six designs a sheet).
 
-    python benchmarks/pattern_gallery.py [--designs 24] [--seed 0] [--out docs/patterns]
+    python -m benchmarks pattern-gallery [--designs 24] [--seed 0] [--out docs/patterns]
 """
 
 from __future__ import annotations
@@ -14,7 +14,6 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 BODIES = ("thin", "regular", "fat")
 PER_SHEET = 6

@@ -2,7 +2,7 @@
 meshed flat at the given edge lengths (time, vertices, minimum and 1st-percentile angle, edge spread,
 longest and shortest edge over the median).
 
-    python benchmarks/pattern_garmentcode.py FILE.json [...] [--edge-length 0.02 0.01]
+    python -m benchmarks pattern-garmentcode FILE.json [...] [--edge-length 0.02 0.01]
 """
 
 from __future__ import annotations
@@ -15,7 +15,6 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 
 def max_difference(p, q) -> float:

@@ -7,7 +7,7 @@ how many build, mesh and pass, the time per garment, vertex counts, mesh quality
 between sewn vertices for the wrapped and the flat placement, and every failure counted by its
 message (numbers replaced by #).
 
-    python benchmarks/pattern_survey.py [--designs 300] [--edge-length 0.02] [--seed 0] [--json out.json]
+    python -m benchmarks pattern-survey [--designs 300] [--edge-length 0.02] [--seed 0] [--json out.json]
 """
 
 from __future__ import annotations
@@ -22,7 +22,6 @@ from pathlib import Path
 
 import numpy as np
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 BODIES = ("thin", "regular", "fat")
 

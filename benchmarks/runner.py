@@ -73,6 +73,13 @@ CASES: tuple[Case, ...] = (
          summary="drape train gnn's loader from a store against the same frames in memory, frames/s"),
     Case(name="gnn-ablations", module="benchmarks.gnn_ablations", needs="drape train gnn run directories",
          summary="paper 000's Figure 10 (validation detail error per epoch per ablation) and its table"),
+    # sewing patterns
+    Case(name="pattern-survey", module="benchmarks.pattern_survey",
+         summary="random pattern designs x thin/regular/fat: how many build, mesh, place and pass the checks; time, vertices, angles"),
+    Case(name="pattern-gallery", module="benchmarks.pattern_gallery",
+         summary="the gallery of docs/patterns/: flat panels beside the placed 3D panels across the programs and bodies"),
+    Case(name="pattern-garmentcode", module="benchmarks.pattern_garmentcode",
+         summary="GarmentCode specification files read, drawn, meshed and written back: structure and largest difference"),
     # simulator
     Case(name="sim", module="benchmarks.sim",
          summary="the simulator: prepare, run (ms per frame at batch sizes), profile (per kernel), prepare-runs, "

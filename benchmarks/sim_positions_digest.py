@@ -290,7 +290,7 @@ def band_on_cone():
 
 
 def cusick():
-    """Cusick's drape (``benchmarks/bench_cusick.py``'s set-up: a 30 cm disc over an 18 cm support with
+    """Cusick's drape (``benchmarks/cusick.py``'s set-up: a 30 cm disc over an 18 cm support with
     a rounded rim), cotton, 2.5 cm edges, 0.5 s."""
     import trimesh
     from scipy.spatial import Delaunay

@@ -24,7 +24,7 @@ sample:
 
 - Drape (re-fitted 2026-11-25): bending, and silk's shear, are fitted so that every preset's Cusick
   drape coefficient lies inside the published range of its fabric (:data:`DRAPE_COEFFICIENT_RANGES`,
-  ``benchmarks/bench_cusick.py``, at the garments' 1.5 cm edges and the production solver). With
+  ``benchmarks/cusick.py``, at the garments' 1.5 cm edges and the production solver). With
   the KES-style values before (cotton 1.2e-5, denim 8e-5, wool 4e-5, polyester 1e-5 N·m) every
   woven draped too stiffly (DC 0.72-0.93); the bending of the discrete-shell hinges on these meshes
   acts stiffer than the continuum's, and the fitted values (cotton 3.5e-6, denim 2e-5, wool 1.5e-5,
@@ -188,7 +188,7 @@ fabric mechanical properties on drape", Textile Res. J. 68 (1998) 57-64 (woven a
 Jeong and Phillips, "A study of fabric-drape behaviour with image analysis, part II", J. Textile
 Inst. 89 (1998) 70-79. Light silks and chiffons 0.2-0.4, cotton shirting 0.4-0.6, jersey knits
 0.3-0.5, denim 0.6-0.85, wool suiting 0.5-0.75, polyester shirting and blouse wovens 0.35-0.65
-(the widest: from soft georgettes to crisp taffetas). ``benchmarks/bench_cusick.py`` drapes every
+(the widest: from soft georgettes to crisp taffetas). ``benchmarks/cusick.py`` drapes every
 preset and checks it against its range."""
 
 

@@ -79,7 +79,7 @@ def save_body_file(model: BodyModel, path: str | Path) -> Path:
         "drape_meta": json.dumps(model.meta, sort_keys=True),
     }
     # a name of this writer's own: two processes building the same cached body at once (the
-    # workers of build_garment_cache.py did) each write whole and rename; the last rename wins
+    # workers of benchmarks/garment_cache.py did) each write whole and rename; the last rename wins
     tmp = path.with_name(f".{path.name}.{os.getpid()}.{uuid.uuid4().hex}.partial")
     try:
         if suffix == ".pkl":

@@ -180,7 +180,7 @@ def elastic_energy(host, x: np.ndarray) -> float:
     define them, from a model's host arrays (:class:`~datagen.sim.model.ClothHostArrays`).
 
     With the kinetic energy and the work of gravity it makes the mechanical energy balance that a
-    dissipative solver can only lower with a static support (``benchmarks/bench_convergence.py``,
+    dissipative solver can only lower with a static support (``benchmarks/convergence.py``,
     ``tests/sim/test_physics.py``)."""
     x = np.asarray(x, dtype=np.float64)
     F, D = host.faces, host.dm_inv

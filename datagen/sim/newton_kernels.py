@@ -5,7 +5,7 @@ Why: a vertex block descent sweep carries a load one vertex further, so woven cl
 stiffness k in the thousands of N/m against an inertia m/h² of about 1 N/m per vertex) needs
 hundreds of sweeps before a garment's weight reaches the seam that carries it; at the production 20
 sweeps a hanging cotton strip stretched 7x its static answer and oscillated without end, and its
-mechanical energy rose (``benchmarks/bench_convergence.py``). Conjugate gradients carry it across the
+mechanical energy rose (``benchmarks/convergence.py``). Conjugate gradients carry it across the
 whole cloth in a few dozen matrix products, as implicit Euler solvers have done since Baraff and
 Witkin (1998); the sweeps that follow add what the global step leaves out (cloth-cloth contacts,
 body friction, the lock's kinks) and keep the conservative bounds.

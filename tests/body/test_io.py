@@ -143,7 +143,7 @@ def test_bad_body_files(tmp_path, small_model):
 
 def test_concurrent_writers_of_one_body_file(small_model, tmp_path):
     """Processes that build the same cached body at once each write a file of their own and rename
-    it into place (the workers of build_garment_cache.py once collided on one temporary name: the
+    it into place (the workers of benchmarks/garment_cache.py once collided on one temporary name: the
     second rename found nothing and its garment was never built); nothing temporary is left."""
     from concurrent.futures import ThreadPoolExecutor
 

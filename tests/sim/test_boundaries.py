@@ -50,7 +50,7 @@ def test_failures_are_typed_and_every_code_has_a_store_code():
 
 
 def test_the_projection_accuracy_below_one_is_refused():
-    """Below β = 1 warp's winding number breaks (benchmarks/winding_accuracy_probe.py: at 0.75 a
+    """Below β = 1 warp's winding number breaks (benchmarks/winding_accuracy_probe.py of 62ea0bb: at 0.75 a
     fifth of the inside-or-out answers differ from β = 2's), so the solver refuses it in one line."""
     from datagen.sim.solver import SolverConfig
 

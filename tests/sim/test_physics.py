@@ -243,7 +243,7 @@ def test_every_preset_hangs_at_its_static_elongation_and_comes_to_rest(name):
     of the last 0.5 s), and its mechanical energy balance never rises above rounding (1e-7 J, or
     0.1 % of gravity's work): the solver makes no energy. Before the global Newton step, at 20
     sweeps, the woven presets stretched 1.3-15x their answer and gained up to 50x the work of
-    gravity (``benchmarks/bench_convergence.py``)."""
+    gravity (``benchmarks/convergence.py``)."""
     mat = MATERIALS[name]
     exact = preset_strip_exact(mat)
     elong, balance, work = hang_preset_strip(mat, SolverConfig(self_collision=False, air_drag=0.0))

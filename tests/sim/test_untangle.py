@@ -1,7 +1,7 @@
 """Intersection contour minimisation (``datagen.sim.untangle_kernels``): a fold of one piece of
 cloth poked through another is pushed back out; cloth that does not cross itself is left exactly
 where it is, by the kernels and by the solver. What it does in garments (the T-shirt runs whose
-crossings it undoes) is measured by ``benchmarks/bench_sim.py run-scenes`` (``docs/simulator.md``)."""
+crossings it undoes) is measured by ``benchmarks/sim.py run-scenes`` (``docs/simulator.md``)."""
 
 from __future__ import annotations
 
