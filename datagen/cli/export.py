@@ -141,6 +141,7 @@ def _cmd_export_usd(args) -> int:
         return 1 if args.validate and _validate(path) else 0
 
     indices = store.split(args.split) if args.split is not None else np.arange(len(store))
+    store.check_files(indices.tolist())  # a damaged shard refuses before the first file is written
     out_dir = check_output_dir(args.out, "output directory")
     written, skipped, invalid = [], [], 0
     failure = store.index["failure"]
