@@ -47,11 +47,15 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
                 data = yaml.load(fh, Loader=_yaml_loader())  # noqa: S506 (a SafeLoader)
         else:
             raise ConfigError(f"config file {path} has suffix '{suffix}'; use .toml, .yaml, .yml or .json")
-    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as exc:
+    except UnicodeDecodeError as exc:  # any of the three: each is UTF-8 text
+        raise ConfigError(f"config file {path} is not UTF-8 text (byte 0x{exc.object[exc.start]:02x} at offset "
+                          f"{exc.start} is not UTF-8): save it as UTF-8 (a {suffix} config is UTF-8 text)") from exc
+    except tomllib.TOMLDecodeError as exc:
         raise ConfigError(f"config file {path} is not valid TOML: {' '.join(str(exc).split())}") from exc
     except Exception as exc:  # yaml.YAMLError without importing yaml at module level
         if type(exc).__module__.startswith("yaml"):
-            raise ConfigError(f"config file {path} is not valid YAML: {' '.join(str(exc).split())}") from exc
+            kind = "JSON" if suffix == ".json" else "YAML"
+            raise ConfigError(f"config file {path} is not valid {kind}: {' '.join(str(exc).split())}") from exc
         raise
     if data is None:
         data = {}
@@ -63,13 +67,31 @@ def read_config_file(path: str | Path) -> dict[str, Any]:
 @functools.cache
 def _yaml_loader():
     """PyYAML's SafeLoader that also reads ``3e-4`` and ``1e3`` as numbers, as YAML 1.2 and TOML
-    do (YAML 1.1 wants a dot in a float, so ``lr: 3e-4`` was the string '3e-4')."""
+    do (YAML 1.1 wants a dot in a float, so ``lr: 3e-4`` was the string '3e-4'), and refuses a
+    key given twice in one mapping, as TOML does (PyYAML keeps the last one without a word)."""
     import re
 
     import yaml
 
     class Loader(yaml.SafeLoader):
-        pass
+        def construct_mapping(self, node, deep=False):
+            if isinstance(node, yaml.MappingNode):
+                seen: dict = {}
+                for key_node, _ in node.value:
+                    if key_node.tag == "tag:yaml.org,2002:merge":
+                        continue  # `<<: *anchor` merges are meant to be overridden
+                    key = self.construct_object(key_node, deep=True)
+                    try:
+                        first = seen.get(key)
+                    except TypeError:  # an unhashable key: SafeLoader says so itself
+                        continue
+                    if first is not None:
+                        raise yaml.constructor.ConstructorError(
+                            "while reading a mapping", node.start_mark,
+                            f"found the key {key!r} twice (first on line {first}); give each key once",
+                            key_node.start_mark)
+                    seen[key] = key_node.start_mark.line + 1
+            return super().construct_mapping(node, deep=deep)
 
     Loader.add_implicit_resolver("tag:yaml.org,2002:float", re.compile(
         r"^[-+]?(?:[0-9][0-9_]*)(?:\.[0-9_]*)?[eE][-+]?[0-9]+$"), list("-+0123456789"))

@@ -67,11 +67,19 @@ measured values passes their own :class:`Material`.
 
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 from datagen.errors import InputError
 
 __all__ = ["DRAPE_COEFFICIENT_RANGES", "MATERIALS", "Material", "drape_range", "material"]
+
+
+_POSITIVE = {"density": "[kg/m²]", "stretch_warp": "[N/m]", "stretch_weft": "[N/m]", "shear": "[N/m]",
+             "thickness": "[m]"}
+"""Material values that must be > 0, with their units."""
+_NON_NEGATIVE = {"bending": "[N·m]", "friction": "[-]", "damping": "[s]"}
+"""Material values that must be >= 0, with their units."""
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -121,6 +129,23 @@ class Material:
     buckling_ratio: float = 1.0
 
     def __post_init__(self):
+        if not isinstance(self.name, str) or not self.name:
+            raise InputError(f"a material needs a name (a non-empty string), got {self.name!r}")
+        for key in ("density", "stretch_warp", "stretch_weft", "shear", "poisson", "bending", "friction", "thickness",
+                    "damping", "lock_strain", "lock_ratio", "max_strain", "buckling_ratio"):
+            value = getattr(self, key)
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise InputError(f"material {self.name!r}: {key} must be a finite number, got {value!r}")
+        for key, unit in _POSITIVE.items():
+            if not getattr(self, key) > 0:
+                raise InputError(f"material {self.name!r}: {key} must be > 0 {unit}, got {getattr(self, key)} "
+                                 "(a stiffness, density or thickness of zero or less is no fabric)")
+        for key, unit in _NON_NEGATIVE.items():
+            if getattr(self, key) < 0:
+                raise InputError(f"material {self.name!r}: {key} must be >= 0 {unit}, got {getattr(self, key)}")
+        if not 0 <= self.poisson < 1:
+            raise InputError(f"material {self.name!r}: poisson must be in [0, 1) (the membrane's coupling of its two "
+                             f"stretches stays positive definite below 1), got {self.poisson}")
         if not self.max_strain > 0:
             raise InputError(f"material {self.name!r}: max_strain must be > 0, got {self.max_strain}")
         if not (self.lock_strain > 0 and self.lock_ratio >= 0):

@@ -12,6 +12,7 @@ interrupted before pack).
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import numpy as np
@@ -53,10 +54,19 @@ def inputs(tmp_path_factory):
         "unknown_key": {"framez": 6},
         "bad_motion_seed": {"train": {**MICRO["train"], "motions": ["walk:-3"]}},
         "zero_batch": {"simulation": {**MICRO["simulation"], "batch_size": 0}},
+        "negative_dataset_seed": {"seed": -1},
     }.items():
         (d / "configs" / f"{name}.json").write_text(json.dumps({**MICRO, **change}))
     (d / "configs" / "micro.json").write_text(json.dumps(MICRO))
     (d / "configs" / "broken.yaml").write_text("frames: [1, 2\n")
+    (d / "configs" / "duplicate.yaml").write_text("frames: 6\nseed: 0\nframes: 8\n")
+    (d / "configs" / "duplicate.json").write_text('{"frames": 6, "frames": 8}')
+    (d / "configs" / "latin1.yaml").write_bytes("name: café\n".encode("latin-1"))
+    (d / "configs" / "latin1.json").write_bytes('{"name": "café"}'.encode("latin-1"))
+    np.savez(d / "amass.npz", poses=np.zeros((4, 156)), trans=np.zeros((4, 3)))
+    (d / "amass.npz").rename(d / "motion.bvh")  # an AMASS-style .npz saved under a .bvh name
+    (d / "bvh_named.npz").write_text((d / "good.bvh").read_text())
+    (d / "random.npz").write_bytes(np.random.default_rng(0).bytes(300))
     store = d / "store"
     writer = sl.open_writer(store, 12, durable=False)
     sl.stage_all(writer)
@@ -100,6 +110,14 @@ CASES = [
      ["batch_size"], ["s.zarr"]),
     ("generate-broken-yaml", ["generate", "IN/configs/broken.yaml", "--out", "OUT/s.zarr"], 2,
      ["broken.yaml"], ["s.zarr"]),
+    ("generate-negative-dataset-seed", ["generate", "IN/configs/negative_dataset_seed.json", "--out", "OUT/s.zarr"], 2,
+     ["seed", "-1"], ["s.zarr"]),
+    ("generate-duplicate-yaml-key", ["generate", "IN/configs/duplicate.yaml", "--out", "OUT/s.zarr"], 2,
+     ["'frames' twice", "line 1"], ["s.zarr"]),
+    ("generate-duplicate-json-key", ["generate", "IN/configs/duplicate.json", "--out", "OUT/s.zarr"], 2,
+     ["'frames' twice", "not valid json"], ["s.zarr"]),
+    ("generate-config-not-utf8", ["generate", "IN/configs/latin1.yaml", "--out", "OUT/s.zarr"], 2,
+     ["latin1.yaml", "not utf-8"], ["s.zarr"]),
     ("generate-missing-config", ["generate", "IN/configs/none.toml", "--out", "OUT/s.zarr"], 2,
      ["none.toml", "does not exist"], ["s.zarr"]),
     ("generate-unknown-preset", ["generate", "--preset", "huge", "--out", "OUT/s.zarr"], 2,
@@ -153,6 +171,10 @@ CASES = [
      ["--fps"], ["m.npz"]),
     ("amass-garbage", ["motion", "import", "IN/garbage.npz", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
      ["garbage.npz"], ["m.npz"]),
+    ("bvh-that-is-an-npz", ["motion", "import", "IN/motion.bvh", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
+     ["motion.bvh", "npz archive", ".npz suffix"], ["m.npz"]),
+    ("npz-that-is-a-bvh", ["motion", "import", "IN/bvh_named.npz", "--label-name", "walk", "--out", "OUT/m.npz"], 2,
+     ["bvh_named.npz", "bvh text", ".bvh suffix"], ["m.npz"]),
     ("motion-make-unknown-label", ["motion", "make", "--label", "moonwalk", "--out", "OUT/m.npz"], 2,
      ["moonwalk"], ["m.npz"]),
     # --- simulate, preview, body export
@@ -182,7 +204,24 @@ CASES = [
     ("evaluate-not-a-run", ["evaluate", "IN/not_a_store"], 2, ["not a drape run directory"], []),
     ("predict-not-a-run", ["predict", "IN/run", "--data", "IN/store", "--sample", "0", "--out", "OUT/p.usda"], 2,
      ["not a drape run directory"], ["p.usda"]),
+    ("predict-zero-max-error", ["predict", "IN/run", "--data", "IN/store", "--sample", "0", "--max-error", "0",
+                                "--out", "OUT/p.usda"], 2, ["--max-error", "> 0"], ["p.usda"]),
+    # --- random bytes, a half store: the words say what the file is and what to run
+    ("preview-random-prediction", ["preview", "IN/store", "--sample", "0", "--prediction", "IN/random.npz",
+                                   "--out", "OUT/p.png"], 2, ["random.npz", "not a numpy .npz"], ["p.png"]),
+    ("export-random-npz", ["export", "usd", "IN/random.npz", "--out", "OUT/a.usda"], 2,
+     ["random.npz", "not a numpy .npz"], ["a.usda"]),
+    ("preview-half-store", ["preview", "IN/half", "--sample", "0", "--out", "OUT/p.png"], 2,
+     ["not complete", "drape generate", "again"], ["p.png"]),
 ]
+
+MISLEADING = {
+    "preview-random-prediction": ["pickle", "allow_pickle"],
+    "export-random-npz": ["pickle", "allow_pickle"],
+    "generate-config-not-utf8": ["toml"],
+    "preview-half-store": ["pack()", "StoreWriter"],
+}
+"""Words a case's message must not hold: what numpy, the wrong parser or the library would say."""
 
 
 @pytest.mark.parametrize("case", CASES, ids=[c[0] for c in CASES])
@@ -209,9 +248,46 @@ def test_bad_input_gets_one_clear_line(case, inputs, tmp_path, capsys, monkeypat
         message = captured.out + err
     for w in words:
         assert w.lower() in message.lower(), (w, message)
+    for w in MISLEADING.get(_name, []):
+        assert w.lower() not in message.lower(), (w, message)
     for rel in absent:
         assert not (tmp_path / rel).exists(), f"{rel} was left behind"
     assert sorted(p.name for p in tmp_path.iterdir()) == before or absent == []
+
+
+def test_a_config_that_is_not_utf8_is_called_so_in_each_format(inputs, tmp_path):
+    from datagen.config import read_config_file
+    from datagen.errors import ConfigError
+
+    (tmp_path / "latin1.toml").write_bytes('name = "café"\n'.encode("latin-1"))
+    for path in (inputs / "configs" / "latin1.yaml", inputs / "configs" / "latin1.json", tmp_path / "latin1.toml"):
+        with pytest.raises(ConfigError) as err:
+            read_config_file(path)
+        text = str(err.value)
+        assert "is not UTF-8 text" in text and "0xe9" in text and "TOML" not in text.replace(".toml", ""), text
+
+
+def test_a_material_value_against_its_meaning():
+    """Stiffness, density and thickness > 0, bending, friction and damping >= 0, Poisson's ratio in
+    [0, 1): a garment file's material (the record drape reads) is refused with the key and unit."""
+    import dataclasses
+
+    from datagen.errors import InputError
+    from datagen.garment.metadata import GarmentMetadata
+    from datagen.materials import MATERIALS
+
+    cotton = MATERIALS["cotton"].as_dict()
+    for key, value, words in [("stretch_warp", -1.0, "stretch_warp must be > 0 [N/m], got -1"),
+                              ("density", 0.0, "density must be > 0 [kg/m²]"),
+                              ("bending", -1e-6, "bending must be >= 0 [N·m]"),
+                              ("poisson", 1.2, "poisson must be in [0, 1)"),
+                              ("shear", float("nan"), "shear must be a finite number"),
+                              ("friction", "high", "friction must be a finite number")]:
+        with pytest.raises(InputError, match=re.escape(words)):
+            GarmentMetadata.from_dict({"type": "tshirt", "material": {**cotton, key: value}})
+    with pytest.raises(InputError, match="thickness must be > 0"):
+        dataclasses.replace(MATERIALS["silk"], thickness=-0.001)
+    assert GarmentMetadata.from_dict({"type": "tshirt", "material": cotton}).material == MATERIALS["cotton"]
 
 
 def test_the_corpus_is_large_enough():

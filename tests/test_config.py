@@ -83,7 +83,7 @@ def test_bad_files(tmp_path):
         load_config(Example, write(tmp_path, "e.toml", "iterations = = 3"))
     with pytest.raises(ConfigError, match="use .toml, .yaml, .yml or .json"):
         load_config(Example, write(tmp_path, "e.ini", "{}"))
-    with pytest.raises(ConfigError, match="not valid YAML"):  # JSON is read as YAML
+    with pytest.raises(ConfigError, match="not valid JSON"):  # read by the YAML parser, named as what it is
         load_config(Example, write(tmp_path, "e.json", "{"))
 
 

@@ -1,7 +1,8 @@
 """The ``drape`` command line. Each capability registers its own subcommands.
 
 Library code logs; this module prints. A :class:`~datagen.errors.DrapeError` is shown as one
-line (``error: ...``) with exit status 2, never as a traceback.
+line (``error: ...``) with exit status 2 (1 for a damaged store, as ``drape validate`` gives), never as
+a traceback.
 """
 
 from __future__ import annotations
@@ -78,7 +79,7 @@ def main(argv: list[str] | None = None) -> int:
         return int(args.func(args) or 0)
     except DrapeError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return 2
+        return getattr(exc, "exit_status", 2)  # 1 for a damaged store (what `drape validate` finds), else 2
     except KeyboardInterrupt:
         hint = _RESUME_HINTS.get(args.command)
         print("interrupted" + (f"; {hint}" if hint else ""), file=sys.stderr)

@@ -141,6 +141,7 @@ def _cmd_export_usd(args) -> int:
         return 1 if args.validate and _validate(path) else 0
 
     indices = store.split(args.split) if args.split is not None else np.arange(len(store))
+    store.check_files(indices.tolist())  # a damaged shard refuses before the first file is written
     out_dir = check_output_dir(args.out, "output directory")
     written, skipped, invalid = [], [], 0
     failure = store.index["failure"]
@@ -178,17 +179,13 @@ def _parse_range(text: str | None) -> tuple[float, float] | None:
 
 
 def _load_prediction(path: str, frame_count: int) -> np.ndarray:
+    from datagen.export.animation import read_npz
+
     p = Path(path)
-    if not p.is_file():
-        raise InputError(f"prediction file {p} does not exist")
-    try:
-        with np.load(p, allow_pickle=False) as d:
-            if "garment_vertices" not in d:
-                raise InputError(f"{p} has no 'garment_vertices' array (the predicted garment [T, V, 3]); it has "
-                                 f"{sorted(d.files)}")
-            pred = np.asarray(d["garment_vertices"], np.float32)
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{p} is not a readable .npz file ({exc})") from None
+    d = read_npz(p, "prediction file")
+    if "garment_vertices" not in d:
+        raise InputError(f"{p} has no 'garment_vertices' array (the predicted garment [T, V, 3]); it has {sorted(d)}")
+    pred = np.asarray(d["garment_vertices"], np.float32)
     if pred.ndim != 3 or pred.shape[0] != frame_count:
         raise InputError(f"the prediction in {p} has shape {pred.shape}; the sample has {frame_count} frames")
     return pred

@@ -193,6 +193,8 @@ def _cmd_info(args) -> int:
         return 0
     info = store_info(args.store)
     print(json.dumps(info, indent=2, default=str) if args.json else format_store_info(info))
+    if info.get("damage"):  # missing shard files: what reads them would refuse; say so by the status too
+        return 1
     if args.plots is not None:
         from datagen.export.plots import plot_store_info
 

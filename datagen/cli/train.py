@@ -331,10 +331,14 @@ def _cmd_predict(args) -> int:
 
     import numpy as np
 
+    from datagen.errors import InputError
     from datagen.export.animation import from_store
     from datagen.store import open_store
     from training.gnn.run import predict_sample
 
+    if not 0 < args.max_error < float("inf"):  # checked before the model runs (NaN fails too)
+        raise InputError(f"--max-error is the error (mm) drawn as the hottest colour: give a number > 0, got "
+                         f"{args.max_error:g}")
     p = predict_sample(args.run, args.data, args.sample)
     anim = from_store(open_store(args.data), args.sample)
     out = Path(args.out)

@@ -30,7 +30,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.export.usd import SkeletonAnimation
 
-__all__ = ["Animation", "check_sample", "from_npz", "from_store", "load_animation", "parse_frames"]
+__all__ = ["Animation", "check_sample", "from_npz", "from_store", "load_animation", "parse_frames", "read_npz"]
 
 logger = logging.getLogger(__name__)
 
@@ -235,16 +235,41 @@ def _scalar(d, key: str, default=None):
     return v.item() if v.ndim == 0 else v
 
 
+def read_npz(path: str | os.PathLike, what: str) -> dict[str, np.ndarray]:
+    """Every array of the NumPy ``.npz`` archive at ``path`` (plain arrays only: a pickled object is
+    refused, never loaded), or :class:`InputError` saying what the file is; ``what`` names the file's
+    role in messages (``"prediction file"``)."""
+    import zipfile
+
+    path = Path(path)
+    if not path.is_file():
+        raise InputError(f"{what} {path} does not exist")
+    if not zipfile.is_zipfile(path):
+        raise InputError(f"{what} {path} is not a NumPy .npz file (an .npz is a zip archive of .npy arrays; this "
+                         "file is not a zip archive): give the .npz that drape or numpy.savez wrote")
+    out: dict[str, np.ndarray] = {}
+    try:
+        with np.load(path, allow_pickle=False) as d:
+            for key in d.files:
+                try:
+                    out[key] = d[key]
+                except ValueError as exc:
+                    if "pickle" not in str(exc):
+                        raise
+                    raise InputError(f"{what} {path}: array {key!r} holds Python objects, which drape does not "
+                                     "load (loading them could run code); save plain numeric arrays") from None
+    except InputError:
+        raise
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile) as exc:
+        raise InputError(f"{what} {path} is a damaged .npz file ({' '.join(str(exc).split())})") from None
+    return out
+
+
 def from_npz(path: str | os.PathLike, *, fps: float | None = None) -> Animation:
     """An ``.npz`` of plain arrays or a ``drape simulate`` result (see the module docstring);
     ``fps`` is for files without one (default 30)."""
     path = Path(path)
-    if not path.is_file():
-        raise InputError(f"{path} does not exist")
-    try:
-        d = dict(np.load(path, allow_pickle=False))
-    except (OSError, ValueError) as exc:
-        raise InputError(f"{path} is not a readable .npz file ({exc})") from None
+    d = read_npz(path, "animation file")
     if "garment_vertices" in d:
         return _from_arrays(path, d, fps)
     if {"positions", "faces", "motion", "body", "garment"} <= set(d):

@@ -91,7 +91,7 @@ class DatasetConfig:
         train, val, test: the splits.
     """
 
-    seed: int = 0
+    seed: int = field(default=0, metadata={"min": 0})
     fps: float = field(default=30.0, metadata={"min": 1.0, "max": 240.0})
     frames: int = field(default=60, metadata={"min": 1, "max": 100000})
     segment_length: int = field(default=60, metadata={"min": 1, "max": 100000})

@@ -302,7 +302,13 @@ def _load_amass_arrays(name: str) -> dict[str, Any]:
         raise InputError(f"AMASS file {name!r} does not exist; pass the path of an AMASS .npz "
                          "(e.g. CMU/01/01_01_poses.npz)")
     if not zipfile.is_zipfile(name):
-        raise InputError(f"{name!r} is not a readable .npz file (not a zip archive); pass an AMASS .npz")
+        with open(name, "rb") as fh:
+            head = fh.read(64).lstrip()
+        if head.startswith(b"HIERARCHY"):
+            raise InputError(f"{name!r} is named .npz but is BVH text, not a NumPy .npz archive: give it the .bvh "
+                             "suffix and import it again")
+        raise InputError(f"{name!r} is not a NumPy .npz file (an .npz is a zip archive; this file is not one); pass "
+                         "an AMASS .npz")
     out: dict[str, Any] = {}
     try:
         with np.load(name, allow_pickle=False) as data:

@@ -163,6 +163,11 @@ def _parse_bvh(path: str) -> _Skeleton:
 
     if not os.path.isfile(path):
         raise InputError(f"BVH file {path!r} does not exist; pass the path of a .bvh file")
+    with open(path, "rb") as f:
+        magic = f.read(4)
+    if magic == b"PK\x03\x04":  # a zip archive: numpy's .npz (an AMASS motion, or drape's own)
+        raise InputError(f"{path!r} is named .bvh but is a NumPy .npz archive (a zip file), not BVH text: if it is "
+                         "an AMASS motion, give it the .npz suffix and import it again")
     with open(path, encoding="utf-8", errors="replace") as f:
         lines = f.read().splitlines()
     stripped = [ln.strip() for ln in lines]

@@ -5,7 +5,9 @@
   what is staged is checked against the schema first (``checks``: :func:`check_sample`,
   :func:`check_static`).
 - :func:`open_store` (``reader``): samples, frames, segments, garment meshes, body and fit models.
-- :func:`validate` (``validation``): every problem of a packed store, as messages.
+- :func:`validate` (``validation``): every problem of a packed store, as messages; its check of
+  the shard files against their recorded digests (``integrity``) also guards every read, which
+  raises :class:`DamagedStoreError` for a missing or changed shard.
 - :func:`store_info` / :func:`format_store_info` (``info``): counts, sizes on disk, failures
   (plots of a store: :func:`datagen.export.plots.plot_store_info`).
 
@@ -22,7 +24,7 @@ import importlib
 
 _EXPORTS = {
     "DatasetStore": "reader", "open_store": "reader",
-    "StorageError": "layout",
+    "StorageError": "layout", "DamagedStoreError": "integrity",
     "SAMPLE_ARRAYS": "checks", "SAMPLE_SCALARS": "checks", "StoreWriter": "writer", "check_sample": "checks",
     "check_static": "checks",
     "validate": "validation",

@@ -158,7 +158,8 @@ def _fit_lines(fit: dict) -> list[str]:
 
 def format_store_info(info: dict[str, Any]) -> str:
     """:func:`store_info` as a plain-text table."""
-    state = "complete" if info["complete"] else "NOT PACKED (generation in progress or pack() interrupted)"
+    state = "complete" if info["complete"] else ("NOT PACKED (generation in progress or interrupted: run the same `drape generate` command "
+                                                 "again to finish it)")
     lines = [f"store {info['path']}: {state}",
              (f"schema {info['schema_version']}, drape {info['drape_version']} (code {info['code_version'] or 'not recorded'}), "
               f"seed {info['seed']}, "

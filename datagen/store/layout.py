@@ -54,15 +54,22 @@ def parse_sample_dir_name(name: str) -> int | None:
     return None
 
 
-def read_root_attributes(path: Path) -> dict[str, Any] | None:
-    """Root attributes of the zarr v3 group at ``path``, or None if there is no readable root metadata."""
+def read_root_metadata(path: Path) -> dict[str, Any] | None:
+    """The root ``zarr.json`` of the zarr v3 group at ``path`` (attributes and consolidated metadata),
+    or None if there is no readable root group metadata."""
     try:
         meta = json.loads((path / ROOT_METADATA).read_text(encoding="utf-8"))
     except (OSError, ValueError):
         return None
     if not isinstance(meta, dict) or meta.get("zarr_format") != 3 or meta.get("node_type") != "group":
         return None
-    attrs = meta.get("attributes", {})
+    return meta
+
+
+def read_root_attributes(path: Path) -> dict[str, Any] | None:
+    """Root attributes of the zarr v3 group at ``path``, or None if there is no readable root metadata."""
+    meta = read_root_metadata(path)
+    attrs = meta.get("attributes", {}) if meta is not None else None
     return attrs if isinstance(attrs, dict) else None
 
 

@@ -9,6 +9,11 @@ Two backends read the same store: ``zarr`` (zarr-python, always installed) and `
 (faster for many small reads; ``pip install tensorstore``). ``backend="auto"`` takes tensorstore
 when it is installed. A :class:`DatasetStore` pickles without its open handles, so torch
 ``DataLoader`` workers can share one.
+
+Every read is checked against the store's recorded shard digests: the first time a reader in a
+process touches a shard file, the file is hashed and compared (:mod:`datagen.store.integrity`), so a
+deleted, truncated, zeroed or bit-flipped shard raises :class:`~datagen.store.integrity.DamagedStoreError`
+instead of reading as zeros or as other numbers.
 """
 
 from __future__ import annotations
@@ -24,7 +29,8 @@ import numpy as np
 
 from datagen.errors import InputError
 from datagen.geometry.positions import decode_positions
-from datagen.store.layout import read_root_attributes
+from datagen.store.integrity import ShardGuard
+from datagen.store.layout import read_root_metadata
 from schemas.dataset import (
     ARRAYS,
     DATASET_SCHEMA_VERSION,
@@ -60,6 +66,13 @@ def version_problem(path, version) -> str | None:
     return (f"store {path} has schema version {version}; this drape reads version {DATASET_SCHEMA_VERSION} "
             f"({why}). Make it again from the config it was made with (a store is a pure function of its config and "
             f"seed): `drape info {path} --config > config.yaml && drape generate config.yaml --out NEW`")
+
+def incomplete_message(path) -> str:
+    """Why a store whose pack has not finished cannot be read, and the command that finishes it."""
+    return (f"store {path} is not complete: its generation or pack was interrupted. Run the same `drape generate` "
+            f"command again (it resumes from the staged samples and packs; `drape info {path} --config > "
+            f"config.yaml` recovers the config: `drape generate config.yaml --out {path}`)")
+
 
 TENSORSTORE_CACHE_BYTES = 64 * 1024 * 1024
 """Tensorstore's chunk and shard-index cache per open store (decoded chunks read again are free)."""
@@ -117,6 +130,28 @@ class _TensorstoreRows:
         return np.asarray(self.array(path).read().result())
 
 
+class _CheckedRows:
+    """A backend's row reads, each shard checked against its recorded digest before its first read
+    (:class:`~datagen.store.integrity.ShardGuard`)."""
+
+    def __init__(self, rows, guard: ShardGuard):
+        self.rows = rows
+        self.guard = guard
+        self.name = rows.name
+
+    def array(self, path: str):
+        return self.rows.array(path)
+
+    def read_many(self, requests: Sequence[tuple[str, int, int]]) -> list[np.ndarray]:
+        for p, a, b in requests:
+            self.guard.check(p, a, b)
+        return self.rows.read_many(requests)
+
+    def read_all(self, path: str) -> np.ndarray:
+        self.guard.check(path)
+        return self.rows.read_all(path)
+
+
 def _backend(name: str):
     if name == "auto":
         try:
@@ -140,6 +175,9 @@ def open_store(path: str | Path, *, backend: str = "auto") -> DatasetStore:
     Raises:
         InputError: ``path`` is not a drape store, is not complete (pack() has not finished), or has
             another schema version.
+
+    Reads from it raise :class:`~datagen.store.integrity.DamagedStoreError` (an ``InputError``) when a
+    shard file they touch is missing or differs from what pack wrote.
     """
     return DatasetStore(path, backend=backend)
 
@@ -160,17 +198,18 @@ class DatasetStore:
 
     def __init__(self, path: str | Path, *, backend: str = "auto"):
         path = Path(path)
-        attrs = read_root_attributes(path)
-        if attrs is None or attrs.get("format") != STORE_FORMAT:
+        meta = read_root_metadata(path)
+        attrs = meta.get("attributes") if meta is not None else None
+        if not isinstance(attrs, dict) or attrs.get("format") != STORE_FORMAT:
             raise InputError(f"{path} is not a drape dataset store (no zarr.json with format '{STORE_FORMAT}')")
         problem = version_problem(path, attrs.get("schema_version"))
         if problem:
             raise InputError(problem)
         if attrs.get("complete") is not True:
-            raise InputError(f"store {path} is not complete: its pack() has not finished. Run generation (or "
-                             "StoreWriter.pack()) on it again")
+            raise InputError(incomplete_message(path))
         self.path = path
         self.attrs = attrs
+        self._meta = meta
         self.config: dict = attrs["config"]
         self.seed: int = attrs["seed"]
         self.sample_count: int = attrs["sample_count"]
@@ -201,21 +240,48 @@ class DatasetStore:
     @property
     def rows(self):
         if self._rows is None or self._pid != os.getpid():  # opened here, or reopened in a forked child
-            self._rows = self._backend_cls(self.path)
+            # a new guard per process: each process checks each shard it reads once
+            self._rows = _CheckedRows(self._backend_cls(self.path), ShardGuard(self.path, self._meta))
             self._pid = os.getpid()
         return self._rows
 
     def array(self, path: str):
-        """The backend's array object for ``path`` (a ``zarr.Array`` or ``tensorstore.TensorStore``)."""
+        """The backend's array object for ``path`` (a ``zarr.Array`` or ``tensorstore.TensorStore``),
+        after checking every shard file of it (reads through this object are not checked again)."""
         if path not in ARRAYS:
             raise InputError(f"no array {path!r} in the schema; arrays are {sorted(ARRAYS)}")
+        self.rows.guard.check(path)
         return self.rows.array(path)
+
+    def check_files(self, samples: Sequence[int] | None = None) -> None:
+        """Check now, against their recorded digests, every shard file that reading ``samples`` (all by
+        default) and the static groups touches, so that a command writing one output per sample can
+        refuse before it writes anything. Raises :class:`~datagen.store.integrity.DamagedStoreError`."""
+        guard = self.rows.guard
+        for a in ARRAYS.values():
+            if a.written_by != "stage_sample" or samples is None:
+                guard.check(a.path)
+        if samples is None:
+            return
+        idx = self.index
+        for i in (self._check(int(i)) for i in samples):
+            f0, f1 = int(idx["frame_start"][i]), int(idx["frame_start"][i + 1])
+            s0, s1 = int(idx["sim_frame_start"][i]), int(idx["sim_frame_start"][i + 1])
+            v0 = int(idx["vertex_start"][i])
+            for n in VERTEX_FRAME_ARRAYS:
+                guard.check(_PATH[n], v0, v0 + (f1 - f0) * int(idx["vertex_count"][i]))
+            for n in FRAME_ARRAYS:
+                guard.check(_PATH[n], f0, f1)
+            for n in SIM_FRAME_ARRAYS:
+                guard.check(_PATH[n], s0, s1)
 
     def read(self, path: str, start: int | None = None, stop: int | None = None) -> np.ndarray:
         """Rows ``start:stop`` of the array at ``path`` (all rows by default)."""
+        if path not in ARRAYS:
+            raise InputError(f"no array {path!r} in the schema; arrays are {sorted(ARRAYS)}")
         if start is None and stop is None:
             return self.rows.read_all(path)
-        arr = self.array(path)
+        arr = self.rows.array(path)
         n = int(arr.shape[0])
         start, stop, _ = slice(start, stop).indices(n)
         return self.rows.read_many([(path, start, max(start, stop))])[0]

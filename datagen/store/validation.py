@@ -147,7 +147,8 @@ def file_problems(path: Path, attrs: dict, meta: dict, quick: bool) -> tuple[lis
     """Every shard file that the layout implies is there, and (unless ``quick``) unchanged since pack
     (its checksum); returns the problems and the arrays with a missing file (a read would give zeros,
     so their values are not checked; a changed file is still read, to say more about it)."""
-    from datagen.store.layout import file_digest, shard_keys
+    from datagen.store.integrity import MISSING, shard_problem, shard_rows
+    from datagen.store.layout import shard_keys
 
     consolidated = (meta.get("consolidated_metadata") or {}).get("metadata") or {}
     recorded = attrs.get("checksums") if isinstance(attrs.get("checksums"), dict) else {}
@@ -159,8 +160,7 @@ def file_problems(path: Path, attrs: dict, meta: dict, quick: bool) -> tuple[lis
         m = consolidated.get(name)
         if not m or m.get("node_type") != "array":
             continue
-        shape = [int(v) for v in m["shape"]]
-        shard = [int(v) for v in m["chunk_grid"]["configuration"]["chunk_shape"]]
+        shape, shard = shard_rows(m)
 
         def rows(key: str) -> str:
             i = int(key.split("/")[1])
@@ -168,17 +168,11 @@ def file_problems(path: Path, attrs: dict, meta: dict, quick: bool) -> tuple[lis
 
         bad = []
         for key in shard_keys(shape, shard):
-            f = path / name / key
-            if not f.is_file():
-                bad.append(f"'{name}': shard file {key} ({rows(key)}) is missing")
-                damaged.add(name)
-            elif not quick:
-                digest = (recorded.get(name) or {}).get(key)
-                if digest is None:
-                    bad.append(f"'{name}': shard file {key} ({rows(key)}) has no checksum recorded at pack")
-                elif file_digest(f) != digest:
-                    bad.append(f"'{name}': shard file {key} ({rows(key)}) differs from what pack wrote (its "
-                               f"checksum); truncated, overwritten or flipped bytes")
+            problem = shard_problem(path, name, key, recorded, digest=not quick)
+            if problem:
+                bad.append(f"'{name}': shard file {key} ({rows(key)}) {problem}")
+                if problem == MISSING:
+                    damaged.add(name)
         if bad:
             out += [f"{b}: {remake}" for b in bad[:MAX_PROBLEMS_PER_CHECK]]
             if len(bad) > MAX_PROBLEMS_PER_CHECK:

@@ -24,17 +24,10 @@ from datagen.store import StorageError, format_store_info, open_store, store_inf
 from datagen.store.layout import MARKER, STAGING, TMP_PREFIX
 from schemas.dataset import ARRAYS, POSITION_QUANTUM, ROOT_ATTRIBUTES, TABLES, Chunking
 from tests.store import stage_loop as sl
+from tests.store.conftest import N, build
 
-N = 12
 HELPER = Path(__file__).with_name("stage_loop.py")
 REPO = Path(__file__).resolve().parents[2]
-
-
-def build(path: Path, n: int = N, **kw):
-    writer = sl.open_writer(path, n, durable=False)
-    sl.stage_all(writer)
-    assert writer.pack(**kw)
-    return writer
 
 
 def snapshot(path: Path) -> dict[str, str]:
@@ -53,13 +46,6 @@ def read_everything(path: Path) -> dict[str, np.ndarray]:
 
     root = zarr.open_group(str(path), mode="r")
     return {p: root[p][...] for p in ARRAYS}
-
-
-@pytest.fixture(scope="module")
-def packed(tmp_path_factory) -> Path:
-    path = tmp_path_factory.mktemp("store") / "ds"
-    build(path)
-    return path
 
 
 # --------------------------------------------------------------------------------------- round trip
@@ -608,6 +594,7 @@ import sys
 sys.path.insert(0, {repo!r})
 from datagen.store import StorageError
 from tests.store import stage_loop as sl
+from tests.store.conftest import N, build
 try:
     sl.open_writer({new!r}, 12)
 except StorageError as exc:
