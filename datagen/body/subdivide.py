@@ -15,9 +15,11 @@ together); :func:`subdivision_posing_error` measures it.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
 
-from typing import TYPE_CHECKING
+from datagen.geometry.topology import unique_edges
 
 if TYPE_CHECKING:  # the model calls this module (BodyModel.subdivided); this one builds its class
     from datagen.body.model import BodyModel
@@ -72,8 +74,7 @@ def subdivision_edges(faces: np.ndarray) -> np.ndarray:
 
 def unique_edge_count(faces: np.ndarray) -> int:
     """Number of distinct undirected edges of a triangle mesh."""
-    e = np.sort(np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]]), axis=1)
-    return int(len(np.unique(e, axis=0)))
+    return len(unique_edges(faces))
 
 
 def subdivision_posing_error(model: "BodyModel", betas: np.ndarray, pose: np.ndarray) -> np.ndarray:

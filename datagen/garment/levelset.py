@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from datagen.geometry.topology import unique_edges
+
 __all__ = ["apply_meshlab_filter", "body_sdf", "collapse_short_edges", "cut_mesh", "extract_surface",
            "largest_component", "remesh", "smin"]
 
@@ -210,9 +212,7 @@ def collapse_short_edges(vertices: np.ndarray, faces: np.ndarray, min_length: fl
     alive = np.ones(len(f), dtype=bool)
     for _ in range(8):
         live = f[alive]
-        e = np.concatenate([live[:, [0, 1]], live[:, [1, 2]], live[:, [2, 0]]])
-        key = np.sort(e, axis=1)
-        uniq, count = np.unique(key, axis=0, return_counts=True)
+        uniq, count = unique_edges(live, return_counts=True)
         boundary_edges = uniq[count == 1]
         on_boundary = np.zeros(len(v), dtype=bool)
         on_boundary[boundary_edges.ravel()] = True

@@ -12,6 +12,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.garment.metadata import GarmentMetadata
 from datagen.garment.registry import GARMENT_TYPES, GarmentType
+from datagen.geometry.topology import unique_edges
 from datagen.materials import Material
 
 __all__ = ["GarmentMesh", "GarmentMetadata", "boundary_loops", "load_garment"]
@@ -20,9 +21,8 @@ __all__ = ["GarmentMesh", "GarmentMetadata", "boundary_loops", "load_garment"]
 def boundary_loops(faces: np.ndarray) -> list[np.ndarray]:
     """Ordered vertex loops [n] of the open boundaries of a manifold triangle mesh."""
     edges = np.concatenate([faces[:, [0, 1]], faces[:, [1, 2]], faces[:, [2, 0]]])
-    key = np.sort(edges, axis=1)
-    _, inverse, counts = np.unique(key, axis=0, return_inverse=True, return_counts=True)
-    boundary = edges[counts[inverse.ravel()] == 1]  # directed, as they appear in their one face
+    _, inverse, counts = unique_edges(faces, return_inverse=True, return_counts=True)
+    boundary = edges[counts[inverse] == 1]  # directed, as they appear in their one face
     nxt = {int(a): int(b) for a, b in boundary}
     loops, seen = [], set()
     for start in nxt:
