@@ -56,13 +56,25 @@ def _cmd_list(args) -> int:
     from datagen.materials import MATERIALS
     from datagen.garment.types import GARMENT_TYPES
 
-    if args.json:
-        print(json.dumps({k: {"code": v.code, "material": v.material, "boundary_loops": v.boundary_loops,
-                              "edge_length": v.edge_length,
-                              "params": {n: {"low": s.low, "high": s.high, "doc": s.doc} for n, s in v.params.items()}}
-                          for k, v in GARMENT_TYPES.items()}, indent=2))
-        return 0
     from datagen.garment.pattern.programs import PROGRAMS
+
+    if args.json:
+        def param(par) -> dict:
+            out = {"doc": par.doc, **({"when": {k: list(v) for k, v in par.when.items()}} if par.when else {})}
+            if hasattr(par, "options"):
+                return {"options": list(par.options), **out}
+            return {"low": par.low, "high": par.high, "step": par.step, "unit": par.unit, **out}
+
+        print(json.dumps({
+            "types": {k: {"code": v.code, "material": v.material, "boundary_loops": v.boundary_loops,
+                          "edge_length": v.edge_length,
+                          "params": {n: {"low": s.low, "high": s.high, "doc": s.doc} for n, s in v.params.items()}}
+                      for k, v in GARMENT_TYPES.items()},
+            "patterns": {k: {"family": prog.family, "doc": prog.doc,
+                             "params": {par.name: param(par) for par in prog.space.params}}
+                         for k, prog in PROGRAMS.items()},
+            "materials": list(MATERIALS)}, indent=2))
+        return 0
 
     print("procedural types (offset shells of the body): --type NAME")
     for k, v in GARMENT_TYPES.items():

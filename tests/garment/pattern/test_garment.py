@@ -90,3 +90,15 @@ def test_cli_makes_a_pattern_garment_and_refuses_bad_input(tmp_path):
                         str(tmp_path / "x.svg"), "--out", str(tmp_path / "x.npz")], capture_output=True, text=True,
                        env=env, cwd=ROOT)
     assert r.returncode == 2 and "--pattern or --spec" in r.stderr
+
+
+def test_garment_list_json_has_both_families(capsys):
+    from datagen.cli import main
+    from datagen.garment.pattern.programs import PROGRAMS
+    from datagen.garment.types import GARMENT_TYPES
+
+    assert main(["garment", "list", "--json"]) == 0
+    listed = json.loads(capsys.readouterr().out)
+    assert set(listed["types"]) == set(GARMENT_TYPES) and set(listed["patterns"]) == set(PROGRAMS)
+    circle = listed["patterns"]["skirt_circle"]
+    assert circle["family"] == "skirt" and all("options" in p or p["low"] <= p["high"] for p in circle["params"].values())
