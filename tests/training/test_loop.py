@@ -23,7 +23,7 @@ def test_a_run_whose_validation_loss_turns_nan_is_reported_as_diverged(tmp_path)
     one line for the train commands) instead of reporting a normal end, and keeps the best epoch."""
     import pytorch_lightning as pl
 
-    from training.config import TrainConfig
+    from training.config import BaseConfig
     from training.loop import divergence_note, fit
 
     class Blows(pl.LightningModule):
@@ -42,8 +42,8 @@ def test_a_run_whose_validation_loss_turns_nan_is_reported_as_diverged(tmp_path)
             return torch.optim.SGD(self.parameters(), lr=0.01)
 
     data = torch.utils.data.TensorDataset(torch.ones(4, 1))
-    loader = torch.utils.data.DataLoader(data, batch_size=2)
-    result = fit(Blows(), loader, loader, TrainConfig(epochs=6, precision="32", workers=0), tmp_path, device="cpu",
+    loaders = pl.LightningDataModule.from_datasets(data, data, batch_size=2)
+    result = fit(Blows(), loaders, BaseConfig(epochs=6, precision="32", workers=0), tmp_path, device="cpu",
                  monitor="val/loss")
     assert result["diverged"]["epoch"] == 2 and result["diverged"]["metric"] == "val/loss"
     assert result["best"] is not None and result["best"] == result["best"]  # the finite best epoch is kept

@@ -31,7 +31,7 @@ import contextlib
 import torch
 from torch import nn
 
-from training.config import ABLATIONS
+from training.gnn.config import ABLATIONS
 
 OUTPUT_LIMIT = 5.0
 """Scale of the bounded output of the ``output_limit`` ablation (in the target unit)."""

@@ -15,29 +15,40 @@ from types import SimpleNamespace
 import pytorch_lightning as pl
 import torch
 
-from datagen.geometry.features import joint_distances, vertex_normals
+from training.gnn.config import GNNConfig
+from training.gnn.features import node_features
 from training.gnn.model import DetailAwareGNN
 
 
 def detail_features(coarse: torch.Tensor, batch) -> torch.Tensor:
-    """[n, p, x] (R^30) of a batch's garments at the coarse positions ``coarse`` [N, 3]."""
-    normals = vertex_normals(coarse[None], batch.face.T)[0]
-    x = joint_distances(coarse[:, None, :], batch.joints[batch.batch])[:, 0]  # [N, J]
-    return torch.cat([normals, batch.skin, x], dim=1)
+    """[n, p, x] (R^30) of a batch's garments at the coarse positions ``coarse`` [N, 3]: the
+    dataset's :func:`~training.gnn.features.node_features` on the batch."""
+    return node_features(coarse, batch.face, batch.skin, batch.joints, batch.batch)
 
 
 class GNNModule(pl.LightningModule):
-    """The Lightning module of paper 000's GNN (config: :class:`training.config.TrainConfig` as a dict)."""
+    """The Lightning module of paper 000's GNN.
+
+    Args:
+        config: the run's :class:`~training.gnn.config.GNNConfig` (a checkpoint stores it as a dict,
+            which loading turns back into the dataclass).
+        attribute_features: length of the parser's input (α, β, θ): :attr:`GNNDataModule.attribute_features`.
+    """
 
     PREDICT_INPUTS = ("x_coarse", "edge_index", "batch", "attributes", "anchor", "face", "joints", "skin")
     """The batch's fields :meth:`predict_frames` reads (what a captured or compiled prediction takes)."""
 
-    def __init__(self, config: dict, attribute_features: int):
+    def __init__(self, config: GNNConfig | dict, attribute_features: int):
         super().__init__()
-        self.save_hyperparameters()
-        self.config = config
-        self.model = DetailAwareGNN(attribute_features=attribute_features, ablation=config["ablation"])
-        self.scale = float(config["target_scale"])
+        self.config = config if isinstance(config, GNNConfig) else GNNConfig.from_dict(config)
+        self.save_hyperparameters({"config": self.config.as_dict(), "attribute_features": attribute_features})
+        self.model = DetailAwareGNN(attribute_features=attribute_features, ablation=self.config.ablation)
+        self.scale = float(self.config.target_scale)
+
+    @classmethod
+    def from_data(cls, config: GNNConfig, data) -> GNNModule:
+        """The module for ``data`` (a :class:`~training.gnn.data.GNNDataModule`)."""
+        return cls(config, data.attribute_features)
 
     # -- prediction
 
@@ -131,7 +142,6 @@ class GNNModule(pl.LightningModule):
                       sync_dist=True, on_epoch=True, on_step=False)
 
     def configure_optimizers(self):
-        opt = torch.optim.Adam(self.parameters(), lr=self.config["lr"])
-        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"],
-                                                           patience=self.config["lr_patience"])
-        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val/detail_mm"}}
+        from training.loop import plateau_optimizer
+
+        return plateau_optimizer(self, self.parameters(), self.config, "val/detail_mm")
