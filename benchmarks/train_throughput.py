@@ -7,10 +7,12 @@ Lightning ``Trainer`` (gradient clipping at 1.0 as ``training.loop.fit`` has it;
 checkpoints, no logger); the clock runs from the first step after the warm-up to the last. A sample
 is a frame (paper 000's GNN) or a segment (paper 001's models; frames = segments x segment length).
 
-    python benchmarks/train_throughput.py --data STORE [--steps 20] [--warmup 3] [--batch-size 4]
+    python benchmarks/train_throughput.py --data STORE --garment-data STORE2 [--steps 20] [--warmup 3]
 
-STORE is any store with fit attributes and labelled motions, e.g. the training tests' micro store
-(``tests/training/conftest.py``'s MICRO_TRAIN through ``drape generate``). Prints one table.
+STORE is a store with fit attributes and labelled motions (the GNN and the motion generator), e.g.
+the training tests' micro store (``tests/training/conftest.py``'s MICRO_TRAIN); STORE2 one with a
+skirt in its train and val splits (the garment regressor), e.g. ``tests/training/test_garment.py``'s
+MOTION_LIKE. Prints one table.
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ import argparse
 import time
 import warnings
 
-GARMENT = "tshirt"
-"""The garment regressor's template type (the micro store's train split has T-shirts and pants)."""
+GARMENT = "skirt"
+"""The garment regressor's template type (``--garment-data`` must hold it in its train and val splits)."""
 
 
 def _build(kind: str, store, batch_size: int, seed: int, threads: int):
@@ -36,10 +38,10 @@ def _build(kind: str, store, batch_size: int, seed: int, threads: int):
     fields = {"batch_size": batch_size, "seed": seed, "workers": 0, "precision": "32"}
     if kind == "garment":
         fields |= {"garment": GARMENT, "max_batch_size": batch_size, "batch_growth": 0}
-    config = record.config(**fields)
-    data = record.datamodule(store, config)
+    config = record.config_class()(**fields)
+    data = record.part("datamodule")(store, config)
     data.setup("fit")
-    module = record.build_module(config, data)
+    module = record.part("module").from_data(config, data)
     frames = 1 if kind == "gnn" else int(store.segment_length)
     return module, data.train_dataloader(), frames
 
@@ -131,6 +133,7 @@ def _samples(batch) -> int:
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--data", required=True, help="a dataset store (fit attributes, labelled motions)")
+    p.add_argument("--garment-data", default=None, help="the garment regressor's store (default: --data)")
     p.add_argument("--models", default="gnn,motion,garment", help="comma-separated kinds")
     p.add_argument("--steps", type=int, default=20, help="timed optimiser steps per model")
     p.add_argument("--warmup", type=int, default=3, help="untimed optimiser steps first")
@@ -147,11 +150,12 @@ def main(argv=None) -> None:
     for name in ("pytorch_lightning", "lightning.pytorch", "lightning_fabric"):
         logging.getLogger(name).setLevel(logging.WARNING)
 
-    store = open_store(args.data)
-    rows = [measure(k.strip(), store, steps=args.steps, warmup=args.warmup, batch_size=args.batch_size,
-                    seed=args.seed, threads=args.threads) for k in args.models.split(",") if k.strip()]
+    stores = {"garment": open_store(args.garment_data or args.data)}
+    rows = [measure(k.strip(), stores.get(k.strip()) or open_store(args.data), steps=args.steps, warmup=args.warmup,
+                    batch_size=args.batch_size, seed=args.seed, threads=args.threads)
+            for k in args.models.split(",") if k.strip()]
     print(f"training throughput on the CPU ({torch.get_num_threads()} threads, torch {torch.__version__}), "
-          f"{args.data}, batch {args.batch_size}, {args.warmup} warm-up + {args.steps} timed steps, seed {args.seed}")
+          f"{args.data} (garment: {args.garment_data or args.data}), batch {args.batch_size}, {args.warmup} warm-up + {args.steps} timed steps, seed {args.seed}")
     print(f"{'model':<9}{'parameters':>12}{'samples/s':>11}{'frames/s':>10}{'s/step':>8}")
     for r in rows:
         print(f"{r['kind']:<9}{r['parameters']:>12,}{r['samples_per_s']:>11.2f}{r['frames_per_s']:>10.2f}"

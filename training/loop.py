@@ -137,9 +137,9 @@ def batch_samples(batch) -> int:
     return len(batch)
 
 
-THROUGHPUT_KEY = "train|device|samples_per_sec"
+THROUGHPUT_KEY = "train/device/samples_per_sec"
 """The training throughput Lightning's ``ThroughputMonitor`` logs (samples per second of one process
-over its last THROUGHPUT_WINDOW batches, validation excluded; ``train|samples_per_sec``: all
+over its last THROUGHPUT_WINDOW batches, validation excluded; ``train/samples_per_sec``: all
 processes together, under DDP)."""
 
 THROUGHPUT_WINDOW = 4

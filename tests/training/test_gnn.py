@@ -335,9 +335,9 @@ def test_the_magnitude_head_learns_small_targets():
 
 
 def _grid_batch(*sizes):
-    sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-    from bench_gnn import grid_frame
     from torch_geometric.data import Batch
+
+    from tests.training.grids import grid_frame
 
     return Batch.from_data_list([grid_frame(n, seed=k) for k, n in enumerate(sizes)])
 
@@ -390,3 +390,26 @@ def test_the_handshake_rounds_complete_the_matching_on_a_garment_sized_mesh():
         enough = handshake_matching(b.edge_index, score, b.num_nodes)
         assert torch.equal(enough, handshake_matching(b.edge_index, score, b.num_nodes, 2 * HANDSHAKE_ROUNDS))
         assert (enough >= 0).float().mean() > 0.9  # handshakes alone: 8 % with the second scores
+
+
+def test_training_and_inference_build_the_same_node_features(train_store):
+    """The dataset's garment-graph features (training, on the ground-truth coarse mesh) are exactly
+    what the module's inference path computes on a batch at the same coarse positions (one function,
+    :func:`training.gnn.features.node_features`, with the batch's offsets), and they are the store's
+    derived features (normals, skinning feature, joint distances) to float rounding."""
+    from torch_geometric.data import Batch
+
+    from datagen.store import open_store
+    from training.gnn.data import FrameDataset
+    from training.gnn.module import detail_features
+
+    store = open_store(train_store)
+    ds = FrameDataset(store, "train", max_frames=8, seed=0)
+    items = [ds[k] for k in range(len(ds))]
+    batch = Batch.from_data_list(items)
+    assert len({int(b.garment) for b in items}) > 1  # garments of different vertex counts in one batch
+    assert torch.equal(detail_features(batch.coarse, batch), batch.x_detail)
+    for item, (i, t) in zip(items, ds.rows.tolist(), strict=True):
+        f = store.frames(int(i), t, names=["coarse_normal", "skin", "joint_distance"])
+        stored = torch.from_numpy(np.concatenate([f["coarse_normal"][0], f["skin"][0], f["joint_distance"][0]], 1))
+        assert torch.allclose(item.x_detail, stored, atol=1e-6)

@@ -49,7 +49,8 @@ class DummyModule(pl.LightningModule):
     def __init__(self, config: DummyConfig | dict):
         super().__init__()
         self.config = config if isinstance(config, DummyConfig) else DummyConfig.from_dict(config)
-        self.save_hyperparameters({"config": self.config.as_dict()})
+        config = self.config.as_dict()  # what the checkpoint keeps
+        self.save_hyperparameters("config")
         self.net = torch.nn.Sequential(torch.nn.Linear(72, self.config.hidden), torch.nn.Tanh(),
                                        torch.nn.Linear(self.config.hidden, 3))
 

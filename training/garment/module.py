@@ -44,7 +44,8 @@ class GarmentModule(pl.LightningModule):
     def __init__(self, config: GarmentConfig | dict, vertices: int, faces):
         super().__init__()
         self.config = config if isinstance(config, GarmentConfig) else GarmentConfig.from_dict(config)
-        self.save_hyperparameters({"config": self.config.as_dict(), "vertices": vertices})
+        config = self.config.as_dict()  # what the checkpoint keeps (loading passes it back as a dict)
+        self.save_hyperparameters("config", "vertices")
         c = self.config
         self.model = GarmentRegressor(vertices, d_model=c.d_model, heads=c.heads, layers=c.layers,
                                       feedforward=c.feedforward, dropout=c.dropout, bos=c.bos,

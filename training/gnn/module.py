@@ -41,7 +41,8 @@ class GNNModule(pl.LightningModule):
     def __init__(self, config: GNNConfig | dict, attribute_features: int):
         super().__init__()
         self.config = config if isinstance(config, GNNConfig) else GNNConfig.from_dict(config)
-        self.save_hyperparameters({"config": self.config.as_dict(), "attribute_features": attribute_features})
+        config = self.config.as_dict()  # what the checkpoint keeps (loading passes it back as a dict)
+        self.save_hyperparameters("config", "attribute_features")
         self.model = DetailAwareGNN(attribute_features=attribute_features, ablation=self.config.ablation)
         self.scale = float(self.config.target_scale)
 
@@ -49,6 +50,12 @@ class GNNModule(pl.LightningModule):
     def from_data(cls, config: GNNConfig, data) -> GNNModule:
         """The module for ``data`` (a :class:`~training.gnn.data.GNNDataModule`)."""
         return cls(config, data.attribute_features)
+
+    def on_load_checkpoint(self, checkpoint: dict) -> None:
+        """Checkpoints written before the fully connected layers were torch_geometric's ``MLP`` load too."""
+        from training.gnn.model import upgrade_state_dict
+
+        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"])
 
     # -- prediction
 

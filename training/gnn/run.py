@@ -77,8 +77,10 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     ds = FrameDataset(store, split, max_frames=max_frames, seed=0)
     names = store.names["body_names"]
     seen = seen_in_training(store)
-    rows: dict[str, dict[str, list]] = {}
-    by_seen: dict[str, dict[str, dict[str, list]]] = {}
+    # per table row (a body, or "all") the running mean of every measure over its frames (torchmetrics'
+    # MeanMetric, in float64) and its frame count
+    rows: dict[str, FrameMeans] = {}
+    by_seen: dict[str, dict[str, FrameMeans]] = {}
     inside_total, vertex_total = 0, 0
     # the posed body, refitted frame by frame on the evaluation's device (before, each frame built a
     # new mesh on the CPU and queried it on one thread: 17 ms for 991 points on this 2-core CPU, per
@@ -116,17 +118,15 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
         # every frame's mean of every measure at once, one copy to the host per batch (not one per
         # frame and measure, each a wait for the device)
         per_frame = 1000 * scatter(torch.stack(list(errs.values()), 1), batch.batch, dim=0,
-                                   dim_size=batch.num_graphs, reduce="mean").cpu().numpy()
+                                   dim_size=batch.num_graphs, reduce="mean").cpu().double()
+        groups: dict[tuple[str | None, str], list[int]] = {}  # the batch's frames of each table row
         for k in range(batch.num_graphs):
-            body = names[int(batch.body[k])]
-            means = dict(zip(errs, per_frame[k].tolist(), strict=True))
-            category = seen[int(batch.sample[k])]
-            for table, key in ((rows, body), (rows, "all"), (by_seen.setdefault(category, {}), body),
-                               (by_seen[category], "all")):
-                r = table.setdefault(key, {m: [] for m in errs} | {"frames": []})
-                for m, v in means.items():
-                    r[m].append(v)
-                r["frames"].append(1)
+            body, category = names[int(batch.body[k])], seen[int(batch.sample[k])]
+            for row in ((None, body), (None, "all"), (category, body), (category, "all")):
+                groups.setdefault(row, []).append(k)
+        for (category, key), ks in groups.items():  # one update per row and batch
+            table = rows if category is None else by_seen.setdefault(category, {})
+            table.setdefault(key, FrameMeans(list(errs))).update(per_frame[ks])
         if collisions:  # one read (and derivation) of the posed bodies per sample, one copy of the batch
             graph = batch.batch.cpu().numpy()
             points = detail.cpu().numpy()
@@ -140,8 +140,8 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
         if progress is not None:
             progress(n_frames, len(ds))
 
-    def summary(r: dict[str, list]) -> dict[str, float]:
-        return {m: float(np.mean(v)) for m, v in r.items() if m != "frames"} | {"frames": len(r["frames"])}
+    def summary(r: FrameMeans) -> dict[str, float]:
+        return r.compute()
 
     table = {key: summary(r) for key, r in rows.items()}
     out = {"run": str(run), "checkpoint": str(ckpt), "split": split, "store": str(store.path), "frames": len(ds),
@@ -152,6 +152,28 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
            "parameters": sum(p.numel() for p in module.parameters()),
            "model_mb": sum(p.numel() * p.element_size() for p in module.parameters()) / 1e6}
     return out
+
+
+class FrameMeans:
+    """One row of the evaluation's tables: the mean of each measure over its frames (torchmetrics'
+    ``MeanMetric`` each, in float64, which also syncs across processes) and the frames counted."""
+
+    def __init__(self, measures: list[str]):
+        from torchmetrics.aggregation import MeanMetric
+
+        self.measures = measures
+        self.means = [MeanMetric().set_dtype(torch.float64) for _ in measures]
+        self.frames = 0
+
+    def update(self, values: torch.Tensor) -> None:
+        """Add frames' means [frames, measures]."""
+        for j, mean in enumerate(self.means):
+            mean.update(values[:, j])
+        self.frames += len(values)
+
+    def compute(self) -> dict[str, float]:
+        return {m: float(mean.compute()) for m, mean in zip(self.measures, self.means, strict=True)} | {
+            "frames": self.frames}
 
 
 SEEN = {(True, True): "garments and poses seen in training", (False, False): "unseen garments and poses",

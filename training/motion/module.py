@@ -103,7 +103,8 @@ class MotionModule(pl.LightningModule):
     def __init__(self, config: MotionConfig | dict, labels: int, body: dict, betas):
         super().__init__()
         self.config = config if isinstance(config, MotionConfig) else MotionConfig.from_dict(config)
-        self.save_hyperparameters({"config": self.config.as_dict(), "labels": labels})
+        config = self.config.as_dict()  # what the checkpoint keeps (loading passes it back as a dict)
+        self.save_hyperparameters("config", "labels")
         c = self.config
         self.model = MotionCVAE(labels, d_model=c.d_model, heads=c.heads, layers=c.layers, feedforward=c.feedforward,
                                 dropout=c.dropout, label_hidden=c.label_hidden)
