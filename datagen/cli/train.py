@@ -123,8 +123,9 @@ def register(sub, formatter) -> None:
     c.set_defaults(func=_cmd_sample_clothed)
 
     p = sub.add_parser("evaluate", formatter_class=formatter, help="a trained model's errors on a split",
-                       description="The evaluation of the run's model kind. For a GNN run, paper 000's Tables 1 and 2 on a split: mean per-vertex error "
-                       "(mm) of the coarse and detailed predictions per body and overall, beside trivial baselines, "
+                       description="The evaluation of the run's model kind (its run.json says which). For a GNN "
+                       "run, paper 000's Tables 1 and 2 on a split: mean per-vertex error (mm) of the coarse and "
+                       "detailed predictions per body and overall, beside trivial baselines, "
                        "and the share of predicted vertices inside the body. For a motion-generator run, paper 001's "
                        "Table 3 (reconstruction RMSE and Hausdorff beside the label's mean pose) and Table 4 (FID, "
                        "recognition accuracy, diversity, multimodality of generated sets, with a recogniser trained "
