@@ -4,7 +4,7 @@ a real motion of the same label, and how fast each moves.
     python -m benchmarks sampled-motion-sheet SAMPLES_DIR --store STORE --out sheet.png [--frames 6]
 
 ``SAMPLES_DIR`` holds one folder per label of ``drape sample motion`` output (``<label>/*.npz``, as
-``benchmarks/paper_motion_gpu_run.sh of 62ea0bb PHASE=eval`` writes); the real motion is the procedural
+``benchmarks/paper_motion_gpu_run.sh PHASE=eval` (at 62ea0bb)` writes); the real motion is the procedural
 library's ``<label>:9`` (seed 9: the test split's seed in paper-motion, never trained on). The skeleton
 is the store's body (its regular body's β) posed by forward kinematics, seen from the front, frames
 drawn evenly over the sequence, left to right. Printed per label: the mean joint speed (m/s) of every

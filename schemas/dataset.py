@@ -27,7 +27,7 @@ from dataclasses import dataclass
 DATASET_SCHEMA_VERSION = 5
 """5: every motion's recorded poses and translations (``motions/pose``, ``motions/trans``), whether
 its scenes passed or failed, so that a motion model learns every motion of the config. 4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored (they come from
-:mod:`datagen.geometry.features`), the subdivided body's topology stored, the fit attribute optional.
+:mod:`datagen.features`), the subdivided body's topology stored, the fit attribute optional.
 3: the code version recorded. 2: the slip metric."""
 
 REFUSED_VERSIONS: dict[int, str] = {
@@ -362,7 +362,7 @@ DERIVED: dict[str, tuple[str, ...]] = {
     "body_vertices": ("pose", "trans"),
 }
 """Per-frame arrays that are functions of the stored ones and the static groups (not stored; the
-reader derives them with :mod:`datagen.geometry.features`), each with the stored per-frame arrays
+reader derives them with :mod:`datagen.features`), each with the stored per-frame arrays
 it is computed from. ``joints`` is stored as well (it is the origin of the quantised positions)."""
 
 ARRAYS: dict[str, ArraySpec] = {a.path: a for a in _ARRAY_LIST}

@@ -13,6 +13,7 @@ A run directory::
       checkpoints/last.ckpt    the full state for resuming, written at an epoch's end at most once a
                                minute (LAST_CHECKPOINT_SECONDS) and at the run's last epoch; best.ckpt
                                the weights of the lowest validation error
+      train_summary.json       what the run ended with (best value, epochs, throughput, data sizes)
       logs/tensorboard/        TensorBoard event files
       logs/csv/attempt-K/metrics.csv   the same scalars as CSV, one file per start (a resumed run
                                appends an attempt; :func:`read_metrics` joins them)
@@ -22,7 +23,6 @@ from __future__ import annotations
 
 import json
 import logging
-import os
 import shutil
 import time
 from pathlib import Path
@@ -31,7 +31,7 @@ from typing import Any
 import torch
 
 from datagen.errors import InputError
-from training.config import TrainConfig
+from training.config import BaseConfig
 
 log = logging.getLogger(__name__)
 
@@ -62,19 +62,36 @@ def resolve_device(device: str) -> str:
     return "cpu"
 
 
+def cluster() -> tuple[int, int, int]:
+    """(global rank, world size, processes on this node) as Lightning's cluster environment reads
+    them (``TorchElasticEnvironment``: the variables ``torchrun`` sets); (0, 1, 1) for one process."""
+    import os
+
+    from lightning_fabric.plugins.environments import TorchElasticEnvironment
+
+    if not TorchElasticEnvironment.detect():
+        return 0, 1, 1
+    env = TorchElasticEnvironment()
+    # Lightning checks that devices x nodes is torchrun's world; torchrun's per-node count is the devices
+    return env.global_rank(), env.world_size(), int(os.environ.get("LOCAL_WORLD_SIZE", env.world_size()))
+
+
+def store_identity(store) -> dict[str, Any]:
+    """What ``run.json`` records of the store a run trained on (a resumed run must train on the same)."""
+    return {"path": str(Path(store.path).resolve()), "seed": store.seed, "code_version": store.attrs.get("code_version"),
+            "schema_version": store.attrs.get("schema_version")}
+
+
 def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, Any]) -> Path:
-    """Create the run directory (or check the one there for ``resume``); never overwrite silently."""
+    """Create the run directory (or check the one there for ``resume``); never overwrite silently.
+
+    Under DDP only rank 0 checks and writes it; the other processes go on to the Trainer, whose
+    process group waits for rank 0 (and torchrun ends them all when rank 0 refuses the directory)."""
     out = Path(out)
     run_file = out / RUN_FILE
     meta = json.loads(json.dumps(meta))  # as the file holds it (tuples become lists)
-    if int(os.environ.get("RANK", "0")) > 0:  # torchrun: rank 0 checks and creates; the others wait for it
-        import time
-
-        for _ in range(600):
-            if run_file.is_file() and json.loads(run_file.read_text()) == meta:
-                return out
-            time.sleep(0.1)
-        raise InputError(f"rank {os.environ['RANK']}: rank 0 did not prepare {out} within a minute")
+    if cluster()[0] > 0:
+        return out
     if resume:
         if not run_file.is_file():
             raise InputError(f"--resume: {out} is not a drape run directory (no {RUN_FILE}); start a run there "
@@ -120,36 +137,25 @@ def batch_samples(batch) -> int:
     return len(batch)
 
 
-def _throughput_callback():
-    """A Lightning callback measuring training samples per second (all processes together) per
-    epoch, validation excluded; logged as ``train/samples_per_s``."""
-    import pytorch_lightning as pl
+THROUGHPUT_KEY = "train/device/samples_per_sec"
+"""The training throughput Lightning's ``ThroughputMonitor`` logs (samples per second of one process
+over its last THROUGHPUT_WINDOW batches, validation excluded; ``train/samples_per_sec``: all
+processes together, under DDP)."""
 
-    class Throughput(pl.Callback):
-        def __init__(self):
-            self.rates: list[float] = []
-            self._t0 = 0.0
-            self._samples = 0
-
-        def on_train_epoch_start(self, trainer, pl_module):
-            self._t0, self._samples = time.perf_counter(), 0
-
-        def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx):
-            self._samples += batch_samples(batch) * trainer.world_size
-
-        def on_train_epoch_end(self, trainer, pl_module):
-            seconds = time.perf_counter() - self._t0
-            if self._samples and seconds > 0:
-                self.rates.append(self._samples / seconds)
-                pl_module.log("train/samples_per_s", self.rates[-1], on_epoch=True, on_step=False)
-
-    return Throughput()
+THROUGHPUT_WINDOW = 4
+"""Batches the logged throughput averages over (paper 001's models take 12 steps an epoch on a
+coarse store; the tests' micro runs 4)."""
 
 
 def _latest_checkpoint(dirpath: Path, seconds: float):
     """A ``ModelCheckpoint`` named ``last`` that saves at an epoch's end when ``seconds`` have passed
     since its last save, when the run stops (max epochs, time limit, early stopping), and at the
-    first epoch."""
+    first epoch.
+
+    Not ``ModelCheckpoint(train_time_interval=...)``: that one checks the clock after every batch
+    and never at the run's end (its time trigger excludes the epoch trigger), so a finished run's
+    last.ckpt could be a minute old and a killed run would resume mid-epoch, where a resumed run
+    is no longer the same function of the seed as an uninterrupted one."""
     from pytorch_lightning.callbacks import ModelCheckpoint
 
     class Latest(ModelCheckpoint):
@@ -171,13 +177,14 @@ def _latest_checkpoint(dirpath: Path, seconds: float):
     return Latest()
 
 
-def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, device: str = "auto",
-        resume: bool = False, monitor: str = "val/detail_mm", distributed_sampler: bool = True) -> dict[str, Any]:
-    """Train ``module`` with Lightning; returns the best validation value and the checkpoint paths.
-    ``distributed_sampler=False`` when the loader's own sampler shares batches out between DDP
-    processes (Lightning otherwise puts a ``DistributedSampler`` in)."""
+def fit(module, data, config: BaseConfig, out: Path, *, device: str = "auto", resume: bool = False,
+        monitor: str = "val/detail_mm", distributed_sampler: bool = True) -> dict[str, Any]:
+    """Train ``module`` on ``data`` (a ``LightningDataModule``) with Lightning; returns the best
+    validation value, the checkpoint paths and the training throughput per epoch.
+    ``distributed_sampler=False`` when the data module's own sampler shares batches out between
+    DDP processes (Lightning otherwise puts a ``DistributedSampler`` in)."""
     import pytorch_lightning as pl
-    from pytorch_lightning.callbacks import EarlyStopping, LearningRateMonitor, ModelCheckpoint
+    from pytorch_lightning.callbacks import EarlyStopping, LearningRateMonitor, ModelCheckpoint, ThroughputMonitor
     from pytorch_lightning.loggers import CSVLogger, TensorBoardLogger
 
     try:
@@ -188,33 +195,38 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
         except ImportError:
             raise InputError("the TensorBoard logs need tensorboard (or tensorboardX): pip install tensorboard") from None
     accelerator = resolve_device(device)
-    world = int(os.environ.get("WORLD_SIZE", "1"))  # torchrun: one process per device
+    _, world, local = cluster()
     precision = config.precision if config.precision != "auto" else ("bf16-mixed" if accelerator == "gpu" else "32")
     best = ModelCheckpoint(dirpath=out / "checkpoints", filename="best", monitor=monitor, mode="min",
                            enable_version_counter=False, save_weights_only=True)
     # at an epoch's end, whatever the score, at most once a minute and at the end (Lightning's
     # save_last writes only when a best one is written)
     latest = _latest_checkpoint(out / "checkpoints", LAST_CHECKPOINT_SECONDS)
-    throughput = _throughput_callback()
+    attempt = len(list((out / "logs" / "csv").glob("attempt-*")))
     trainer = pl.Trainer(
-        max_epochs=config.epochs, accelerator=accelerator,
-        devices=int(os.environ.get("LOCAL_WORLD_SIZE", "1")) if world > 1 else 1,
-        num_nodes=max(1, world // int(os.environ.get("LOCAL_WORLD_SIZE", str(world)))) if world > 1 else 1,
+        max_epochs=config.epochs, accelerator=accelerator, devices=local, num_nodes=max(1, world // local),
         strategy="ddp" if world > 1 else "auto", precision=precision,
         callbacks=[best, latest, EarlyStopping(monitor=monitor, mode="min", patience=config.early_stop_patience),
-                   LearningRateMonitor(logging_interval="epoch"), throughput],
+                   LearningRateMonitor(logging_interval="epoch"),
+                   ThroughputMonitor(batch_size_fn=batch_samples, window_size=THROUGHPUT_WINDOW)],
         logger=[TensorBoardLogger(out / "logs", name="tensorboard", version=""),
-                CSVLogger(out / "logs", name="csv", version=f"attempt-{len(list((out / 'logs' / 'csv').glob('attempt-*')))}")],
+                CSVLogger(out / "logs", name="csv", version=f"attempt-{attempt}")],
         max_time=None if config.max_minutes is None else {"minutes": config.max_minutes},
         log_every_n_steps=1, deterministic=False, enable_model_summary=False, use_distributed_sampler=distributed_sampler,
         gradient_clip_val=1.0)
-    trainer.fit(module, train_loader, val_loader,
-                ckpt_path=str(out / "checkpoints" / "last.ckpt") if resume and (out / "checkpoints" / "last.ckpt").is_file()
-                else None)
+    import warnings
+
+    with warnings.catch_warnings():  # ThroughputMonitor asks for FLOPs, which drape does not count
+        warnings.filterwarnings("ignore", message=".*flops_per_batch.*")
+        trainer.fit(module, datamodule=data,
+                    ckpt_path=str(out / "checkpoints" / "last.ckpt")
+                    if resume and (out / "checkpoints" / "last.ckpt").is_file() else None)
     score = best.best_model_score
+    rates = read_metrics(out, THROUGHPUT_KEY, attempts=[attempt]) if trainer.is_global_zero else {}
     result = {"best": None if score is None else float(score), "best_checkpoint": best.best_model_path,
               "last_checkpoint": str(out / "checkpoints" / "last.ckpt"), "epochs": trainer.current_epoch,
-              "world_size": trainer.world_size, "train_samples_per_second": throughput.rates}
+              "world_size": trainer.world_size,
+              "train_samples_per_second": [r * trainer.world_size for r in rates.values()]}
     last = trainer.callback_metrics.get(monitor)
     if last is not None and not bool(torch.isfinite(last.detach().float()).all()):
         # early stopping ends a run whose monitored value is NaN or infinite: say so, not "trained N epochs"
@@ -222,6 +234,16 @@ def fit(module, train_loader, val_loader, config: TrainConfig, out: Path, *, dev
         result["diverged"] = {"epoch": epoch, "metric": monitor, "value": float(last)}
         log.warning("training diverged: %s is %s at epoch %d", monitor, float(last), epoch)
     return result
+
+
+def plateau_optimizer(module, params, config, monitor: str, *, patience_steps: int | None = None) -> dict:
+    """``configure_optimizers``'s answer for every drape model: Adam at ``config.lr`` on ``params``,
+    and the rate times ``config.lr_factor`` when ``monitor`` has not fallen for ``config.lr_patience``
+    epochs (or more where epochs are short: :func:`plateau_patience` with ``patience_steps``)."""
+    opt = torch.optim.Adam(params, lr=config.lr)
+    patience = plateau_patience(module, config.lr_patience, patience_steps)
+    sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=config.lr_factor, patience=patience)
+    return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": monitor}}
 
 
 def plateau_patience(module, epochs: int, steps: int | None) -> int:
@@ -253,6 +275,12 @@ def divergence_note(result: dict[str, Any], precision: str) -> str | None:
             f"the config" + (", or train with precision: \"32\"" if precision != "32" else "") + ", and --force a new run")
 
 
+def write_summary(out: Path, result: dict[str, Any]) -> None:
+    """``train_summary.json`` of a run (rank 0 writes it)."""
+    if cluster()[0] == 0:
+        (Path(out) / "train_summary.json").write_text(json.dumps(result, indent=2))
+
+
 def run_meta(run: str | Path) -> dict | None:
     """The run.json of a run directory, or None where ``run`` is not one."""
     path = Path(run) / RUN_FILE
@@ -277,13 +305,16 @@ def run_checkpoint(run: str | Path, kind: str, model: str, *, checkpoint: str = 
     return meta, path
 
 
-def read_metrics(run: str | Path, key: str) -> dict[int, float]:
-    """Epoch -> the last logged value of ``key`` over every attempt of a run (a later attempt wins)."""
+def read_metrics(run: str | Path, key: str, *, attempts: list[int] | None = None) -> dict[int, float]:
+    """Epoch -> the last logged value of ``key`` over every attempt of a run (a later attempt wins),
+    or over the ``attempts`` given (numbers, from 0)."""
     import csv
 
     out: dict[int, float] = {}
-    attempts = sorted((Path(run) / "logs" / "csv").glob("attempt-*"), key=lambda p: int(p.name.split("-")[1]))
-    for attempt in attempts:
+    found = sorted((Path(run) / "logs" / "csv").glob("attempt-*"), key=lambda p: int(p.name.split("-")[1]))
+    for attempt in found:
+        if attempts is not None and int(attempt.name.split("-")[1]) not in attempts:
+            continue
         f = attempt / "metrics.csv"
         if not f.is_file():
             continue

@@ -1,4 +1,5 @@
-"""``drape train``, ``drape evaluate`` and ``drape predict``: paper 000's GNN from a dataset store."""
+"""``drape train``, ``drape evaluate``, ``drape predict`` and ``drape sample``: the model kinds of
+``training.kinds`` (one ``drape train KIND`` per record; evaluate and predict dispatch on the run's kind)."""
 
 from __future__ import annotations
 
@@ -41,19 +42,16 @@ def register(sub, formatter) -> None:
                        "  drape train gnn --data small.zarr --out runs/no-parser --ablation no_parser\n"
                        "  torchrun --nproc-per-node 2 -m datagen.cli train gnn --data small.zarr --out runs/ddp")
     models = p.add_subparsers(dest="model", metavar="MODEL", required=True)
-    g = models.add_parser("gnn", formatter_class=formatter, help="paper 000's detail-aware GNN")
-    _run_arguments(g, "training.config.TrainConfig")
-    g.add_argument("--ablation", default=None, help="a variant of paper 000 §5.3 (overrides the config)")
-    g.set_defaults(func=_cmd_train_gnn)
-    m = models.add_parser("motion", formatter_class=formatter, help="paper 001's Transformer-CVAE motion generator",
-                          description="Train paper 001's label-conditioned motion generator (§3.2) on a store's "
-                          "labelled 60-frame segments (pose, translation, label); the checkpoint is chosen on the "
-                          "val split's loss.",
-                          epilog="examples:\n  drape train motion --data motion.zarr --out runs/motion --device cuda\n"
-                          "  drape train motion --data motion.zarr --out runs/no-vertex --no-vertex-loss")
-    _run_arguments(m, "training.motion.config.MotionConfig")
-    m.add_argument("--no-vertex-loss", action="store_true", help="train without L_V^B (Table 8's ablation)")
-    m.set_defaults(func=_cmd_train_motion)
+    from training.kinds import kinds
+
+    for kind in kinds():
+        k = models.add_parser(kind.name, formatter_class=formatter, help=kind.help, description=kind.description,
+                              epilog=kind.epilog)
+        config = kind.config if isinstance(kind.config, str) else f"{kind.config.__module__}:{kind.config.__name__}"
+        _run_arguments(k, config.replace(":", "."))
+        if kind.arguments is not None:
+            kind.arguments(k)
+        k.set_defaults(func=_cmd_train, kind=kind.name)
     f = models.add_parser("refine", formatter_class=formatter, help="paper 001's collision refinement of a regressor",
                           description="Fine-tune a garment regressor on motions sampled from a motion generator with "
                           "the collision loss of paper 001 eq. 4 (no ground truth), dropping sequences with heavy "
@@ -73,16 +71,6 @@ def register(sub, formatter) -> None:
                    help="where Z is drawn from: posterior (default), each label's Gaussian fitted to the training "
                         "posteriors; prior, N(0, I) as paper 001 (docs/training.md measures both)")
     f.set_defaults(func=_cmd_refine)
-    r = models.add_parser("garment", formatter_class=formatter, help="paper 001's garment regressor (one template)",
-                          description="Train paper 001's dynamic garment regressor (§3.3) for one garment type's "
-                          "template on a store's 60-frame segments: a pose encoder and an autoregressive garment "
-                          "decoder with a learnable BOS (pretrained, then frozen), vertex and Laplacian losses.",
-                          epilog="examples:\n  drape train garment --data motion.zarr --garment skirt --out runs/skirt\n"
-                          "  drape train garment --data motion.zarr --garment skirt --out runs/skirt-zero-bos --zero-bos")
-    _run_arguments(r, "training.garment.config.GarmentConfig")
-    r.add_argument("--garment", default=None, help="the garment type (overrides the config; default skirt)")
-    r.add_argument("--zero-bos", action="store_true", help="a fixed zero BOS instead of the learned one (Table 9)")
-    r.set_defaults(func=_cmd_train_garment)
 
     p = sub.add_parser("sample", formatter_class=formatter, help="new motions from a trained generator",
                        description="Sample new motions of a label from a trained motion generator and write them "
@@ -135,8 +123,9 @@ def register(sub, formatter) -> None:
     c.set_defaults(func=_cmd_sample_clothed)
 
     p = sub.add_parser("evaluate", formatter_class=formatter, help="a trained model's errors on a split",
-                       description="For a GNN run, paper 000's Tables 1 and 2 on a split: mean per-vertex error "
-                       "(mm) of the coarse and detailed predictions per body and overall, beside trivial baselines, "
+                       description="The evaluation of the run's model kind (its run.json says which). For a GNN "
+                       "run, paper 000's Tables 1 and 2 on a split: mean per-vertex error (mm) of the coarse and "
+                       "detailed predictions per body and overall, beside trivial baselines, "
                        "and the share of predicted vertices inside the body. For a motion-generator run, paper 001's "
                        "Table 3 (reconstruction RMSE and Hausdorff beside the label's mean pose) and Table 4 (FID, "
                        "recognition accuracy, diversity, multimodality of generated sets, with a recogniser trained "
@@ -176,41 +165,16 @@ def _diverged(result: dict, config) -> int:
     return 0
 
 
-def _cmd_train_gnn(args) -> int:
-    from training.config import TrainConfig
-    from training.gnn.run import train_gnn
+def _cmd_train(args) -> int:
+    from training.kinds import get_kind
 
-    config = _train_config(TrainConfig, args, ablation=args.ablation)
-    result = train_gnn(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
-    print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_frames']} frames; best "
-          f"validation detail error {result['best']:.2f} mm ({result['best_checkpoint']})")
-    return _diverged(result, config)
-
-
-def _cmd_train_motion(args) -> int:
-    from training.motion.config import MotionConfig
-    from training.motion.run import train_motion
-
-    config = _train_config(MotionConfig, args, vertex_loss=False if args.no_vertex_loss else None)
-    result = train_motion(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
-    print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments; "
-          f"best validation loss {result['best']:.4f} ({result['best_checkpoint']})")
-    if result["labels_without_training_segments"]:
-        print(f"warning: no training segments of {', '.join(result['labels_without_training_segments'])} (no motion "
-              "of the train split has that label): the generator has not learned them and "
-              "`drape sample motion` refuses them")
-    return _diverged(result, config)
-
-
-def _cmd_train_garment(args) -> int:
-    from training.garment.config import GarmentConfig
-    from training.garment.run import train_garment
-
-    config = _train_config(GarmentConfig, args, garment=args.garment, bos="zero" if args.zero_bos else None)
-    result = train_garment(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
-    print(f"trained {result['epochs']} epochs in {result['seconds']:.0f} s on {result['train_segments']} segments of "
-          f"the {config.garment} template ({result['template_vertices']} vertices); best validation loss "
-          f"{result['best']:.4f} ({result['best_checkpoint']})")
+    kind = get_kind(args.kind)
+    config = _train_config(kind.config_class(), args, **kind.overrides(args))
+    result = kind.part("train")(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
+    report = kind.part("report")
+    print(report(result, config) if report is not None else
+          f"trained {result['epochs']} epochs in {result['seconds']:.0f} s; best validation value {result['best']} "
+          f"({result['best_checkpoint']})")
     return _diverged(result, config)
 
 
@@ -291,39 +255,43 @@ def _cmd_sample_clothed(args) -> int:
     return 0
 
 
-def _run_kind(run: str) -> str | None:
-    from training.loop import run_meta
+def _run_kind(run: str):
+    """The record of the model kind a run directory holds (one line for a directory that is not a
+    run, and for a kind drape does not know)."""
+    from datagen.errors import InputError
+    from training.loop import RUN_FILE, run_meta
+    from training.kinds import get_kind
 
-    return (run_meta(run) or {}).get("kind")
+    meta = run_meta(run)
+    if meta is None:
+        raise InputError(f"{run} is not a drape run directory (no {RUN_FILE}); give the --out of `drape train`")
+    return get_kind(meta.get("kind"))
 
 
 def _cmd_evaluate(args) -> int:
+    from datagen.cli.progress import reporter
+    from datagen.errors import InputError
+    from training.kinds import EvaluateRequest
+
     kind = _run_kind(args.run)
-    if kind == "garment":
-        from training.garment.run import evaluate_garment, format_garment_evaluation
-
-        e = evaluate_garment(args.run, data=args.data, split=args.split, device=args.device)
-        print(format_garment_evaluation(e))
-    elif kind == "motion":
-        from training.motion.run import evaluate_motion, format_motion_evaluation
-
-        e = evaluate_motion(args.run, data=args.data, split=args.split, device=args.device,
-                            generation=not args.no_generation, repetitions=args.repetitions)
-        print(format_motion_evaluation(e))
-    else:
-        from training.gnn.run import evaluate_gnn, format_evaluation
-
-        from datagen.cli.progress import reporter
-
-        progress = reporter(f"evaluating on {args.split}", "frame")
-        e = evaluate_gnn(args.run, data=args.data, split=args.split, max_frames=args.max_frames, device=args.device,
-                         progress=progress)
-        progress.close()
-        print(format_evaluation(e))
+    if kind.evaluate is None:
+        raise InputError(f"{args.run} holds a {kind.name!r} model, which has no evaluation")
+    progress = reporter(f"evaluating on {args.split}", "frame")
+    e = kind.part("evaluate")(EvaluateRequest(run=args.run, data=args.data, split=args.split, device=args.device,
+                                              max_frames=args.max_frames, repetitions=args.repetitions,
+                                              generation=not args.no_generation, progress=progress))
+    progress.close()
+    print(kind.part("format_evaluation")(e))
     if args.json:
         Path(args.json).write_text(json.dumps(e, indent=2))
         print(f"wrote {args.json}", file=sys.stderr)
     return 0
+
+
+def _kinds():
+    from training.kinds import kinds
+
+    return kinds()
 
 
 def _cmd_predict(args) -> int:
@@ -334,12 +302,15 @@ def _cmd_predict(args) -> int:
     from datagen.errors import InputError
     from datagen.export.animation import from_store
     from datagen.store import open_store
-    from training.gnn.run import predict_sample
 
     if not 0 < args.max_error < float("inf"):  # checked before the model runs (NaN fails too)
         raise InputError(f"--max-error is the error (mm) drawn as the hottest colour: give a number > 0, got "
                          f"{args.max_error:g}")
-    p = predict_sample(args.run, args.data, args.sample)
+    kind = _run_kind(args.run)
+    if kind.predict is None:
+        raise InputError(f"{args.run} holds a {kind.name!r} model; drape predict predicts with "
+                         f"{', '.join(k.name for k in _kinds() if k.predict is not None)} runs")
+    p = kind.part("predict")(args.run, args.data, args.sample)
     anim = from_store(open_store(args.data), args.sample)
     out = Path(args.out)
     error_mm = 1000 * p["error"]

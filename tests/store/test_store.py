@@ -691,7 +691,7 @@ def test_reading_a_store_loads_the_reader_alone():
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert "datagen.store.reader" in loaded
     for heavy in ("datagen.store.writer", "datagen.store.checks", "datagen.store.pack", "datagen.store.validation",
-                  "datagen.store.info", "'fcntl'", "'torch'", "datagen.features", "datagen.geometry.features",
+                  "datagen.store.info", "'fcntl'", "'torch'", "datagen.features",
                   "datagen.sim",
                   "datagen.garment", "datagen.body"):
         assert heavy not in loaded, (heavy, loaded)

@@ -440,36 +440,3 @@ def test_positions_round_trip_within_the_stated_bound():
     err = np.abs(decode_positions(steps, root, POSITION_QUANTUM).astype(np.float64) - x).max()
     assert POSITION_QUANTUM / 2 * 0.9 < err <= POSITION_QUANTUM / 2 + 4e-7, err
 
-
-def test_node_features_are_the_derived_arrays_side_by_side_for_one_frame_and_a_batch(
-        tshirt, store_body, betas, correspondence, short_sample):
-    """Paper 000's node vectors (R^7 body graph, R^30 garment graph) from the derived arrays, as a
-    dataset builds them, equal the ones rebuilt from a coarse mesh, as a model at inference does;
-    two garments batched as one graph (offset faces, per-vertex joints) give the same rows."""
-    import torch
-
-    from datagen.features import bind_garment, body_shape, coarse_node_features, derive, detail_node_features
-
-    poses, trans, _, out = short_sample
-    binding = bind_garment(body_shape(store_body, betas), tshirt.vertices, tshirt.faces, correspondence["indicator"])
-    t = lambda a: torch.as_tensor(np.asarray(a), dtype=torch.float64)  # noqa: E731
-    d = derive(binding, ["anchor_normal", "anchor_skin", "coarse_normal", "skin", "joint_distance"], pose=t(poses),
-               trans=t(trans), coarse=t(out["coarse"]), joints=t(out["joints"]))
-    alpha = torch.tensor([0.3, -1.0], dtype=torch.float64)
-    V = len(tshirt.vertices)
-    x_coarse = coarse_node_features(d["anchor_normal"][0], d["anchor_skin"][0], alpha)
-    assert x_coarse.shape == (V, 7)
-    torch.testing.assert_close(x_coarse, torch.cat([d["anchor_normal"][0], d["anchor_skin"][0],
-                                                    alpha[:1].expand(V, 1)], dim=1), rtol=0, atol=0)
-    faces = torch.as_tensor(tshirt.faces, dtype=torch.long)
-    coarse, joints = t(out["coarse"]), t(out["joints"])
-    x_detail = detail_node_features(coarse[0], faces, d["skin"][0], joints[0])
-    assert x_detail.shape == (V, 30)
-    torch.testing.assert_close(x_detail, torch.cat([d["coarse_normal"][0], d["skin"][0], d["joint_distance"][0]],
-                                                   dim=1), rtol=0, atol=1e-12)
-    # frames 0 and 1 as one batched graph, as torch_geometric collates them
-    batched = detail_node_features(torch.cat([coarse[0], coarse[1]]), torch.cat([faces, faces + V]),
-                                   torch.cat([d["skin"][0], d["skin"][1]]),
-                                   torch.cat([joints[0].expand(V, -1, -1), joints[1].expand(V, -1, -1)]))
-    torch.testing.assert_close(batched, torch.cat([x_detail, detail_node_features(coarse[1], faces, d["skin"][1],
-                                                                                  joints[1])]), rtol=0, atol=1e-12)

@@ -102,7 +102,7 @@ def test_greedy_decoding_replayed_as_a_cuda_graph_equals_plain_decoding():
 
 
 def test_batches_grow_as_the_paper_says():
-    from training.garment.run import GrowingBatchSampler
+    from training.garment.data import GrowingBatchSampler
 
     s = GrowingBatchSampler(100, 10, 5, 200, 25, seed=0)
     sizes = {}
@@ -252,7 +252,7 @@ def test_refinement_writes_a_run_and_reports_interpenetration(motion_store, garm
 
 
 def test_growing_batches_are_shared_out_between_ddp_processes():
-    from training.garment.run import GrowingBatchSampler
+    from training.garment.data import GrowingBatchSampler
 
     full = GrowingBatchSampler(11, 4, 0, 10, 4, seed=3)
     ranks = [GrowingBatchSampler(11, 4, 0, 10, 4, seed=3, rank=r, world=2) for r in range(2)]
@@ -320,7 +320,7 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
     """``relative_to: skinned``: the regressor learns the garment minus the template skinned to the
     pose. A model whose output layer is zero then predicts exactly the skinned template: in the
     evaluation (its row equals the baseline's) and when dressing a new motion file."""
-    from datagen.geometry.features import derive
+    from datagen.features import derive
     from datagen.motion.motion import Motion
     from datagen.store import open_store
     from training.garment.run import dress_motion, evaluate_garment, load_garment, train_garment
@@ -335,7 +335,7 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
     assert e["relative_to"] == "skinned" and np.isfinite(e["model"]["rmse"])
     # training derives the skinned template from the batch's poses (on the training device); it is the
     # store's derived ``skin``, which evaluation reads
-    from training.data import SegmentDataset
+    from training.paper001.data import SegmentDataset
 
     module, meta, _, store0 = load_garment(run)
     batch = next(iter(torch.utils.data.DataLoader(SegmentDataset(store0, "train", names=("pose", "trans", "skin")),

@@ -18,12 +18,15 @@ import pytest
 import torch
 
 from datagen.errors import ConfigError, InputError
-from training.config import TrainConfig
-from training.gnn.model import ABLATIONS, DetailAwareGNN
+from training.gnn.config import ABLATIONS, GNNConfig
+from training.gnn.model import DetailAwareGNN
 
 pytestmark = pytest.mark.slow
 
 QUICK = {"epochs": 4, "batch_size": 4, "workers": 0, "max_train_frames": 16, "max_val_frames": 6, "lr": 1e-3}
+
+
+from training.loop import THROUGHPUT_KEY  # noqa: E402
 
 
 def epoch_losses(run: Path, key: str = "train/loss_epoch") -> list[float]:
@@ -37,7 +40,7 @@ def trained(train_store, tmp_path_factory):
     from training.gnn.run import train_gnn
 
     run = tmp_path_factory.mktemp("runs") / "gnn"
-    result = train_gnn(train_store, run, TrainConfig(**{**QUICK, "workers": 1}), device="cpu")  # a worker process
+    result = train_gnn(train_store, run, GNNConfig(**{**QUICK, "workers": 1}), device="cpu")  # a worker process
     return run, result
 
 
@@ -64,7 +67,7 @@ def test_training_loss_falls_and_checkpoints_are_written(trained):
     # training throughput (validation excluded), one figure per epoch, also in the CSV log
     rates = result["train_samples_per_second"]
     assert len(rates) == QUICK["epochs"] and all(r > 0 for r in rates) and result["world_size"] == 1
-    assert len(epoch_losses(run, "train/samples_per_s")) == QUICK["epochs"]
+    assert len(epoch_losses(run, THROUGHPUT_KEY)) == QUICK["epochs"]
     assert (run / "checkpoints" / "last.ckpt").is_file() and (run / "checkpoints" / "best.ckpt").is_file()
     assert list((run / "logs" / "tensorboard").glob("events.out.tfevents.*"))
     meta = json.loads((run / "run.json").read_text())
@@ -158,18 +161,18 @@ def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
 
     run, _ = trained
     with pytest.raises(InputError, match="exists and is not empty; give --resume"):
-        train_gnn(train_store, run, TrainConfig(**QUICK), device="cpu")
+        train_gnn(train_store, run, GNNConfig(**QUICK), device="cpu")
     with pytest.raises(InputError, match="asked for a GPU but torch sees none") if not torch.cuda.is_available() \
             else contextlib.nullcontext():
-        train_gnn(train_store, tmp_path / "gpu", TrainConfig(**QUICK), device="cuda")
+        train_gnn(train_store, tmp_path / "gpu", GNNConfig(**QUICK), device="cuda")
     with pytest.raises(InputError, match="trained with another config.*only epochs and max_minutes may change"):
-        train_gnn(train_store, run, TrainConfig(**{**QUICK, "lr": 0.5}), device="cpu", resume=True)
+        train_gnn(train_store, run, GNNConfig(**{**QUICK, "lr": 0.5}), device="cpu", resume=True)
     with pytest.raises(ConfigError, match="ablation = 'nope' is not allowed"):
-        load_config(TrainConfig, {"ablation": "nope"})
+        load_config(GNNConfig, {"ablation": "nope"})
     with pytest.raises(InputError, match="not a drape run directory"):
         evaluate_gnn(tmp_path, device="cpu")
     with pytest.raises(InputError, match="is not a drape dataset store"):
-        train_gnn(tmp_path, tmp_path / "x", TrainConfig(**QUICK), device="cpu")
+        train_gnn(tmp_path, tmp_path / "x", GNNConfig(**QUICK), device="cpu")
     assert not (tmp_path / "x").exists()
 
 
@@ -256,16 +259,26 @@ def test_seen_in_training_sorts_test_samples_by_what_the_train_split_holds():
 def test_epoch_frames_draws_a_fresh_subset_every_epoch():
     from torch_geometric.data import Data
 
-    from training.gnn.run import _loader
+    from training.gnn.data import GNNDataModule
 
     ds = [Data(x=torch.tensor([[float(k)]]), num_nodes=1) for k in range(40)]
-    loader = _loader(ds, TrainConfig(batch_size=4, workers=0, epoch_frames=12), shuffle=True, accelerator="cpu")
+
+    class Frames(GNNDataModule):  # the data module's loader over a list of graphs instead of a store
+        def build(self):
+            self.train_set = ds
+
+    def _loader(config):
+        frames = Frames(None, config)
+        frames.setup("fit")
+        return frames.train_dataloader()
+
+    loader = _loader(GNNConfig(batch_size=4, workers=0, epoch_frames=12))
     epochs = [sorted(int(v) for b in loader for v in b.x[:, 0]) for _ in range(3)]
     assert all(len(e) == len(set(e)) == 12 for e in epochs) and len(loader) == 3
     assert epochs[0] != epochs[1] != epochs[2]
-    again = _loader(ds, TrainConfig(batch_size=4, workers=0, epoch_frames=12), shuffle=True, accelerator="cpu")
+    again = _loader(GNNConfig(batch_size=4, workers=0, epoch_frames=12))
     assert sorted(int(v) for b in again for v in b.x[:, 0]) == epochs[0]  # seeded
-    whole = _loader(ds, TrainConfig(batch_size=4, workers=0), shuffle=True, accelerator="cpu")
+    whole = _loader(GNNConfig(batch_size=4, workers=0))
     assert sorted(int(v) for b in whole for v in b.x[:, 0]) == list(range(40))
 
 
@@ -322,8 +335,9 @@ def test_the_magnitude_head_learns_small_targets():
 
 
 def _grid_batch(*sizes):
-    from benchmarks.gnn import grid_frame
     from torch_geometric.data import Batch
+
+    from tests.training.grids import grid_frame
 
     return Batch.from_data_list([grid_frame(n, seed=k) for k, n in enumerate(sizes)])
 
@@ -336,7 +350,7 @@ def test_static_shapes_give_the_same_prediction():
     torch.manual_seed(0)
     b = _grid_batch(300, 200)
     for ablation in ABLATIONS:
-        m = GNNModule({**TrainConfig(ablation=ablation).as_dict()}, 85).eval()
+        m = GNNModule(GNNConfig(ablation=ablation), 85).eval()
         with torch.no_grad():
             dynamic = m.predict_frames(b)
             m.model.set_static_shapes(True)
@@ -351,7 +365,7 @@ def test_a_captured_prediction_replays_what_eager_gives(parallel_branches):
     from training.gnn.module import GNNModule
 
     torch.manual_seed(0)
-    m = GNNModule(TrainConfig().as_dict(), 85).cuda().eval()
+    m = GNNModule(GNNConfig(), 85).cuda().eval()
     first, second = _grid_batch(900).cuda(), _grid_batch(900).cuda()
     second.x_coarse += 0.1 * torch.randn_like(second.x_coarse)
     second.anchor += 0.01
@@ -376,3 +390,26 @@ def test_the_handshake_rounds_complete_the_matching_on_a_garment_sized_mesh():
         enough = handshake_matching(b.edge_index, score, b.num_nodes)
         assert torch.equal(enough, handshake_matching(b.edge_index, score, b.num_nodes, 2 * HANDSHAKE_ROUNDS))
         assert (enough >= 0).float().mean() > 0.9  # handshakes alone: 8 % with the second scores
+
+
+def test_training_and_inference_build_the_same_node_features(train_store):
+    """The dataset's garment-graph features (training, on the ground-truth coarse mesh) are exactly
+    what the module's inference path computes on a batch at the same coarse positions (one function,
+    :func:`training.gnn.features.node_features`, with the batch's offsets), and they are the store's
+    derived features (normals, skinning feature, joint distances) to float rounding."""
+    from torch_geometric.data import Batch
+
+    from datagen.store import open_store
+    from training.gnn.data import FrameDataset
+    from training.gnn.module import detail_features
+
+    store = open_store(train_store)
+    ds = FrameDataset(store, "train", max_frames=8, seed=0)
+    items = [ds[k] for k in range(len(ds))]
+    batch = Batch.from_data_list(items)
+    assert len({int(b.garment) for b in items}) > 1  # garments of different vertex counts in one batch
+    assert torch.equal(detail_features(batch.coarse, batch), batch.x_detail)
+    for item, (i, t) in zip(items, ds.rows.tolist(), strict=True):
+        f = store.frames(int(i), t, names=["coarse_normal", "skin", "joint_distance"])
+        stored = torch.from_numpy(np.concatenate([f["coarse_normal"][0], f["skin"][0], f["joint_distance"][0]], 1))
+        assert torch.allclose(item.x_detail, stored, atol=1e-6)

@@ -23,7 +23,7 @@ def test_a_run_whose_validation_loss_turns_nan_is_reported_as_diverged(tmp_path)
     one line for the train commands) instead of reporting a normal end, and keeps the best epoch."""
     import pytorch_lightning as pl
 
-    from training.config import TrainConfig
+    from training.config import BaseConfig
     from training.loop import divergence_note, fit
 
     class Blows(pl.LightningModule):
@@ -42,11 +42,41 @@ def test_a_run_whose_validation_loss_turns_nan_is_reported_as_diverged(tmp_path)
             return torch.optim.SGD(self.parameters(), lr=0.01)
 
     data = torch.utils.data.TensorDataset(torch.ones(4, 1))
-    loader = torch.utils.data.DataLoader(data, batch_size=2)
-    result = fit(Blows(), loader, loader, TrainConfig(epochs=6, precision="32", workers=0), tmp_path, device="cpu",
+    loaders = pl.LightningDataModule.from_datasets(data, data, batch_size=2)
+    result = fit(Blows(), loaders, BaseConfig(epochs=6, precision="32", workers=0), tmp_path, device="cpu",
                  monitor="val/loss")
     assert result["diverged"]["epoch"] == 2 and result["diverged"]["metric"] == "val/loss"
     assert result["best"] is not None and result["best"] == result["best"]  # the finite best epoch is kept
     note = divergence_note(result, "bf16-mixed")
     assert "diverged" in note and "epoch 2" in note and "precision" in note
     assert divergence_note({"best_checkpoint": "x"}, "32") is None
+
+
+def test_the_loop_logs_the_training_throughput_of_every_epoch(tmp_path):
+    """Lightning's ThroughputMonitor (validation excluded) gives one figure per epoch: in the CSV log
+    and in fit's result."""
+    import pytorch_lightning as pl
+
+    from training.config import BaseConfig
+    from training.loop import THROUGHPUT_KEY, fit, read_metrics
+
+    class Line(pl.LightningModule):
+        def __init__(self):
+            super().__init__()
+            self.w = torch.nn.Parameter(torch.ones(1))
+
+        def training_step(self, batch, _):
+            return ((self.w * batch[0] - 2) ** 2).mean()
+
+        def validation_step(self, batch, _):
+            self.log("val/loss", ((self.w * batch[0] - 2) ** 2).mean())
+
+        def configure_optimizers(self):
+            return torch.optim.SGD(self.parameters(), lr=0.01)
+
+    data = torch.utils.data.TensorDataset(torch.ones(16, 1))
+    result = fit(Line(), pl.LightningDataModule.from_datasets(data, data, batch_size=2),
+                 BaseConfig(epochs=3, precision="32", workers=0), tmp_path, device="cpu", monitor="val/loss")
+    rates = result["train_samples_per_second"]
+    assert len(rates) == 3 and all(r > 0 for r in rates)
+    assert list(read_metrics(tmp_path, THROUGHPUT_KEY)) == [0, 1, 2]

@@ -29,7 +29,8 @@ def motion_run(train_store, tmp_path_factory):
 
 
 def test_the_model_follows_the_paper_and_samples_reproducibly():
-    from training.motion.model import FRAME_FEATURES, MotionCVAE, features_to_frames, frames_to_features
+    from training.motion.model import MotionCVAE
+    from training.paper001.frames import FRAME_FEATURES, features_to_frames, frames_to_features
 
     m = MotionCVAE(17).eval()  # §4.2: d_model 256, 4 heads, N = 8 layers, feed-forward 1024
     assert len(m.encoder.layers) == len(m.decoder.layers) == 8 and m.d_model == 256
@@ -108,8 +109,9 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
 def test_the_posterior_latent_is_each_labels_gaussian_over_the_training_posteriors(motion_run, tmp_path):
     """The per-label fit equals its definition on the training segments' (μ, σ²), is cached beside
     the checkpoint, and samples drawn from it are reproducible and differ from the prior's."""
-    from training.motion.module import pose_features
-    from training.motion.run import _segments, label_latents, load_motion, sample_sequences
+    from training.paper001.frames import pose_features
+    from training.motion.data import labelled_segments
+    from training.motion.run import label_latents, load_motion, sample_sequences
 
     run, _ = motion_run
     loaded = load_motion(run)
@@ -118,7 +120,7 @@ def test_the_posterior_latent_is_each_labels_gaussian_over_the_training_posterio
     assert label_latents(loaded, "prior") is None
     cache = ckpt.with_name(ckpt.name + ".latents.npz")
     assert cache.is_file()
-    batch = next(iter(torch.utils.data.DataLoader(_segments(store, "train"), batch_size=10_000)))
+    batch = next(iter(torch.utils.data.DataLoader(labelled_segments(store, "train"), batch_size=10_000)))
     x, _ = pose_features(batch)
     label = batch["label"][:, 0].long()
     with torch.no_grad():
@@ -223,7 +225,7 @@ def test_bad_input_gets_one_clear_line(motion_run, tmp_path):
 
 
 def test_sted_is_zero_for_rigid_motion_and_grows_with_stretch():
-    from training.motion.sted import mesh_edges, sted
+    from training.paper001.sted import mesh_edges, sted
 
     rng = np.random.default_rng(1)
     verts = torch.as_tensor(rng.normal(size=(40, 3)), dtype=torch.float32)
@@ -248,11 +250,11 @@ def test_each_body_motion_counts_once_whatever_the_garments(train_store):
     segments); the generator reads the motion tables instead: one segment per (motion, body, first
     frame), 4, every key of the split once, with the poses and translations the samples recorded."""
     from datagen.store import open_store
-    from training.motion.run import _segments
+    from training.motion.data import labelled_segments
 
     store = open_store(train_store)
     every = store.split_segments("train")
-    ds = _segments(store, "train")
+    ds = labelled_segments(store, "train")
     idx, seg = store.index, store.index["segments"]
 
     def key(k):
@@ -308,6 +310,7 @@ def test_the_graphed_training_step_gives_the_eager_gradients(monkeypatch):
                 if p.grad is not None:
                     p.grad.zero_()
         loss_g = graphed._graph_losses(batch)["loss"]
+        loss_g.backward()  # replays the captured backward pass
         loss_e = eager.losses(batch)["loss"]
         loss_e.backward()
         assert torch.allclose(loss_g, loss_e.detach(), rtol=1e-4), k

@@ -2,37 +2,35 @@
 
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass, field
 
+from training.config import default
 from training.garment.model import BOS_KINDS
+from training.paper001.config import Paper001Config
 
 
 @dataclass(frozen=True, kw_only=True)
-class GarmentConfig:
-    """How paper 001's garment regressor is built and trained (§4.2's values are the defaults).
+class GarmentConfig(Paper001Config):
+    """How paper 001's garment regressor is built and trained (§4.2's values are the defaults; the
+    shared fields: :class:`~training.paper001.config.Paper001Config`).
 
     Attributes:
         garment: the garment type whose template is learned (one topology per model, e.g. ``skirt``).
-        seed: seeds torch, numpy, Python and the DataLoader workers.
-        epochs: most epochs (paper: 2000).
+        epochs: paper: 2000.
         batch_size, batch_growth, growth_every, max_batch_size: the batch starts at ``batch_size``
             segments and grows by ``batch_growth`` every ``growth_every`` epochs up to
             ``max_batch_size`` (paper: 10, 5, 200, 25).
-        lr, lr_factor, lr_patience: Adam's rate, times ``lr_factor`` when the validation loss has
-            not fallen for ``lr_patience`` epochs (paper: 1e-3, 0.1, 30).
-        lr_patience_steps: ... and for at least this many optimiser steps (``training.loop.plateau_patience``);
-            None (the default): epochs only. 2,160 (paper 001's 30 epochs of ~1,800 segments in
-            batches of 25) was tried on the coarse paper-motion store and lost on the validation
-            split (best validation loss 8.46 against 6.90 with the learned BOS, 13.29 against 6.53
-            with the zero BOS; H100, docs/training.md): at 1e-3 the regressor's validation loss
-            swings by 5x from epoch to epoch on 220 segments, and the earlier cut steadies it.
-        early_stop_patience: stop when the validation loss has not fallen for this many epochs.
-        workers: as for the other models.
-        precision: Lightning's precision, 32-bit by default: with the learned BOS, bf16 mixed precision
-            on CUDA stalls at a high loss and turns NaN within a few hundred steps while the same run
-            in float32 (or with a zero BOS in bf16) trains (measured on an H200, docs/training.md).
-        d_model, heads, layers, feedforward, dropout: the Transformers (paper: 256, 4, M = 2, 512, 0.1).
+        lr: paper: 1e-3.
+        lr_patience_steps: None (the default): epochs only. 2,160 (paper 001's 30 epochs of ~1,800
+            segments in batches of 25) was tried on the coarse paper-motion store and lost on the
+            validation split (best validation loss 8.46 against 6.90 with the learned BOS, 13.29
+            against 6.53 with the zero BOS; H100, docs/training.md): at 1e-3 the regressor's
+            validation loss swings by 5x from epoch to epoch on 220 segments, and the earlier cut
+            steadies it.
+        precision: 32-bit by default: with the learned BOS, bf16 mixed precision on CUDA stalls at a
+            high loss and turns NaN within a few hundred steps while the same run in float32 (or
+            with a zero BOS in bf16) trains (measured on an H200, docs/training.md).
+        d_model, heads, layers, feedforward, dropout: paper: 256, 4, M = 2, 512, 0.1.
         bos: ``learned`` (the MLP on the mean pose, pretrained then frozen) or ``zero`` (Table 9).
         bos_hidden: the BOS MLP's hidden widths (paper: 1024 and 4096).
         bos_epochs: epochs of the BOS MLP's pretraining on the sequences' last frames.
@@ -47,43 +45,29 @@ class GarmentConfig:
             all three templates, and only in it does the regressor beat the skinned template
             (docs/training.md); runs trained before the switch existed load as ``translation``.
         target_scale: positions are in metres x this in the loss (100: cm).
-        max_minutes: stop after this much wall time (None: no limit).
     """
 
+    LEGACY = {"relative_to": "translation", "lr_patience_steps": None}
+
     garment: str = "skirt"
-    seed: int = 0
-    epochs: int = field(default=2000, metadata={"min": 1, "max": 1000000})
-    batch_size: int = field(default=10, metadata={"min": 1, "max": 4096})
+    epochs: int = default("epochs", 2000)
+    batch_size: int = default("batch_size", 10)
     batch_growth: int = field(default=5, metadata={"min": 0, "max": 4096})
     growth_every: int = field(default=200, metadata={"min": 1, "max": 1000000})
     max_batch_size: int = field(default=25, metadata={"min": 1, "max": 4096})
-    lr: float = field(default=1e-3, metadata={"min": 1e-7, "max": 1.0})
-    lr_factor: float = field(default=0.1, metadata={"min": 0.01, "max": 1.0})
-    lr_patience: int = field(default=30, metadata={"min": 1, "max": 100000})
-    lr_patience_steps: int | None = field(default=None, metadata={"min": 1, "max": 10000000})
-    early_stop_patience: int = field(default=200, metadata={"min": 1, "max": 100000})
-    workers: int = field(default=0, metadata={"min": 0, "max": 64})
-    precision: str = field(default="32", metadata={"choices": ("auto", "32", "bf16-mixed", "16-mixed")})
-    d_model: int = field(default=256, metadata={"min": 8, "max": 4096})
-    heads: int = field(default=4, metadata={"min": 1, "max": 64})
-    layers: int = field(default=2, metadata={"min": 1, "max": 64})
-    feedforward: int = field(default=512, metadata={"min": 8, "max": 16384})
-    dropout: float = field(default=0.1, metadata={"min": 0.0, "max": 0.9})
+    precision: str = default("precision", "32")
+    layers: int = default("layers", 2, Paper001Config)
+    feedforward: int = default("feedforward", 512, Paper001Config)
     bos: str = field(default="learned", metadata={"choices": BOS_KINDS})
     bos_hidden: tuple[int, int] = (1024, 4096)
     bos_epochs: int = field(default=200, metadata={"min": 0, "max": 1000000})
     laplacian_weight: float = field(default=0.1, metadata={"min": 0.0, "max": 1e3})
     relative_to: str = field(default="skinned", metadata={"choices": ("skinned", "translation")})
     target_scale: float = field(default=100.0, metadata={"min": 1e-3, "max": 1e6})
-    max_minutes: float | None = field(default=None, metadata={"min": 0.1})
 
     def __post_init__(self):
-        from datagen.errors import ConfigError
-
-        if self.d_model % self.heads:
-            raise ConfigError(f"d_model ({self.d_model}) must be a multiple of heads ({self.heads})")
+        super().__post_init__()
         if self.max_batch_size < self.batch_size:
-            raise ConfigError(f"max_batch_size ({self.max_batch_size}) is below batch_size ({self.batch_size})")
+            from datagen.errors import ConfigError
 
-    def as_dict(self) -> dict:
-        return dataclasses.asdict(self)
+            raise ConfigError(f"max_batch_size ({self.max_batch_size}) is below batch_size ({self.batch_size})")

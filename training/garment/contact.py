@@ -16,7 +16,7 @@ def body_contact(garment: torch.Tensor, body: torch.Tensor, body_faces: torch.Te
                  ) -> tuple[torch.Tensor, torch.Tensor]:
     """(closest body vertex [T, V, 3], its unit normal [T, V, 3]) for garment vertices [T, V, 3]
     on posed bodies [T, B, 3]."""
-    from datagen.geometry.features import vertex_normals
+    from datagen.geometry.topology import vertex_normals
 
     from training.metrics import nearest
 

@@ -20,7 +20,7 @@ import contextlib
 import torch
 from torch import nn
 
-from training.motion.model import FRAME_FEATURES, sinusoidal_positions
+from training.paper001.frames import FRAME_FEATURES, sinusoidal_positions
 
 BOS_KINDS = ("learned", "zero")
 

@@ -13,11 +13,12 @@ import numpy as np
 import pytorch_lightning as pl
 import torch
 
+from training.garment.config import GarmentConfig
 from training.garment.model import GarmentRegressor
 
 
 def template_edges(faces: np.ndarray) -> np.ndarray:
-    from training.motion.sted import mesh_edges
+    from training.paper001.sted import mesh_edges
 
     return mesh_edges(faces)
 
@@ -30,25 +31,45 @@ def uniform_laplacian(x: torch.Tensor, edges: torch.Tensor, degree: torch.Tensor
 
 
 class GarmentModule(pl.LightningModule):
-    def __init__(self, config: dict, vertices: int, faces):
+    """The Lightning module of the garment regressor.
+
+    Args:
+        config: the run's :class:`~training.garment.config.GarmentConfig` (a checkpoint stores it as a
+            dict, which loading turns back into the dataclass; runs from before ``relative_to``
+            existed load as ``translation``).
+        vertices: the template's vertex count.
+        faces: the template's triangles [F, 3] (not saved: loading takes them from the store again).
+    """
+
+    def __init__(self, config: GarmentConfig | dict, vertices: int, faces):
         super().__init__()
-        self.save_hyperparameters(ignore=["faces"])  # the template's faces come from the store on load
-        self.config = config
-        self.model = GarmentRegressor(vertices, d_model=config["d_model"], heads=config["heads"],
-                                      layers=config["layers"], feedforward=config["feedforward"],
-                                      dropout=config["dropout"], bos=config["bos"],
-                                      bos_hidden=tuple(config["bos_hidden"]))
+        self.config = config if isinstance(config, GarmentConfig) else GarmentConfig.from_dict(config)
+        config = self.config.as_dict()  # what the checkpoint keeps (loading passes it back as a dict)
+        self.save_hyperparameters("config", "vertices")
+        c = self.config
+        self.model = GarmentRegressor(vertices, d_model=c.d_model, heads=c.heads, layers=c.layers,
+                                      feedforward=c.feedforward, dropout=c.dropout, bos=c.bos,
+                                      bos_hidden=tuple(c.bos_hidden))
         edges = torch.as_tensor(template_edges(np.asarray(faces)))
         degree = torch.zeros(vertices).index_add(0, edges[:, 0], torch.ones(len(edges)))
         degree = degree.index_add(0, edges[:, 1], torch.ones(len(edges))).clamp(min=1)
         self.register_buffer("edges", edges, persistent=False)
         self.register_buffer("degree", degree, persistent=False)
-        self.scale = float(config["target_scale"])
-        self.relative_to = config.get("relative_to", "translation")  # runs from before the switch: the paper's
+        self.scale = float(c.target_scale)
+        self.relative_to = c.relative_to
         self.binding = None  # the template on its body (DatasetStore.binding), for the skinned frame
         if self.model.bos is not None:  # pretrained before fitting, then frozen (§4.2)
             for p in self.model.bos.parameters():
                 p.requires_grad_(False)
+
+    @classmethod
+    def from_data(cls, config: GarmentConfig, data) -> GarmentModule:
+        """The module for ``data`` (a :class:`~training.garment.data.GarmentDataModule`), with the
+        template's binding for the skinned frame (derived on the training device)."""
+        data.setup()
+        module = cls(config, len(data.template["rest_vertices"]), data.template["faces"])
+        module.binding = data.store.binding(data.template_index)
+        return module
 
     def base(self, batch) -> torch.Tensor:
         """What the regressor's frames are relative to, [B, T, V or 1, 3] m: the root translation
@@ -68,7 +89,7 @@ class GarmentModule(pl.LightningModule):
         if self.binding is None:
             raise RuntimeError("the skinned frame needs the template's binding: set module.binding = "
                                "store.binding(template) (train_garment and load_garment do)")
-        from datagen.geometry.features import derive
+        from datagen.features import derive
 
         B, T = pose.shape[:2]
         skin = derive(self.binding, ["skin"], pose=pose.float().reshape(B * T, *pose.shape[2:]))["skin"]
@@ -81,7 +102,7 @@ class GarmentModule(pl.LightningModule):
 
     def targets(self, batch) -> tuple[torch.Tensor, torch.Tensor]:
         """(pose features [B, T, 147], garment frames [B, T, V*3] relative to :meth:`base`, scaled)."""
-        from training.motion.module import pose_features
+        from training.paper001.frames import pose_features
 
         x, _ = pose_features(batch)
         g = (batch["detail"].float() - self.base(batch)) * self.scale
@@ -93,7 +114,7 @@ class GarmentModule(pl.LightningModule):
         vertex = torch.nn.functional.mse_loss(p, t)
         lap = torch.nn.functional.mse_loss(uniform_laplacian(p, self.edges, self.degree),
                                            uniform_laplacian(t, self.edges, self.degree))
-        return {"vertex": vertex, "laplacian": lap, "loss": vertex + self.config["laplacian_weight"] * lap,
+        return {"vertex": vertex, "laplacian": lap, "loss": vertex + self.config.laplacian_weight * lap,
                 "vertex_mm": 1000 / self.scale * (p - t).norm(dim=-1).mean()}
 
     def training_step(self, batch, _):
@@ -113,9 +134,7 @@ class GarmentModule(pl.LightningModule):
         self.log("val/vertex_mm", r["vertex_mm"], batch_size=n, prog_bar=True, sync_dist=True)
 
     def configure_optimizers(self):
-        opt = torch.optim.Adam([p for p in self.parameters() if p.requires_grad], lr=self.config["lr"])
-        from training.loop import plateau_patience
+        from training.loop import plateau_optimizer
 
-        patience = plateau_patience(self, self.config["lr_patience"], self.config.get("lr_patience_steps"))
-        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"], patience=patience)
-        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val/loss"}}
+        return plateau_optimizer(self, [p for p in self.parameters() if p.requires_grad], self.config, "val/loss",
+                                 patience_steps=self.config.lr_patience_steps)

@@ -37,8 +37,8 @@ def refine_garment(garment_run: str | Path, motion_run: str | Path, out: str | P
     from datagen.geometry.rotations import axis_angle_to_matrix
     from training.garment.run import load_garment
     from training.loop import RUN_FILE, resolve_device
-    from training.motion.model import frames_to_features
-    from training.motion.module import BodyLayer
+    from training.paper001.body import BodyLayer
+    from training.paper001.frames import frames_to_features
     from training.motion.run import load_motion, sample_sequences, train_label_counts
 
     if samples < 2 or steps < 1:

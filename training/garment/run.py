@@ -1,10 +1,7 @@
-"""Train and evaluate paper 001's garment regressor on one garment template of a store.
-
-The template is the garment instance of the config's type with the most training segments; its
-segments in every split are used (a ``paper-motion`` store keeps the same garments in every split:
-only the motions differ). :func:`evaluate_garment` gives Tables 6/7/9's figures on a split's unseen
+"""Train and evaluate paper 001's garment regressor on one garment template of a store
+(:mod:`training.garment.data`). :func:`evaluate_garment` gives Tables 6/7/9's figures on a split's unseen
 segments, decoded greedily from the poses alone: RMSE of the vertices (m), Hausdorff distance (m,
-mean over frames), STED (:mod:`training.motion.sted`), the cosine similarity of vertex normals and
+mean over frames), STED (:mod:`training.paper001.sted`), the cosine similarity of vertex normals and
 the share of garment vertices inside the posed body (eq. 4's test; also of the simulated garment),
 beside a trivial baseline (the template skinned to the pose: the store's derived ``skin`` plus the
 translation).
@@ -12,7 +9,6 @@ translation).
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -22,74 +18,13 @@ import torch
 
 from datagen.errors import InputError
 from datagen.store import open_store
-from training.data import SegmentDataset
 from training.garment.config import GarmentConfig
-from training.loop import fit, prepare_run, resolve_device, run_checkpoint, seed_everything
+from training.garment.data import GarmentDataModule, template_segments
+from training.loop import (fit, prepare_run, resolve_device, run_checkpoint, seed_everything, store_identity,
+                           write_summary)
+from training.paper001.data import SegmentDataset
 
 KIND = "garment"
-
-
-def template_instance(store, garment: str) -> int:
-    """The instance of garment type ``garment`` with the most training segments."""
-    names = list(store.attrs.get("garment_type_names") or [])
-    if garment not in names:
-        raise InputError(f"unknown garment type {garment!r}; this store has: {', '.join(names)}")
-    code = names.index(garment)
-    types = store.group("garments")["type"]
-    counts: dict[int, int] = {}
-    for g in segment_garments(store, store.split_segments("train")):
-        if int(types[g]) == code:
-            counts[int(g)] = counts.get(int(g), 0) + 1
-    if not counts:
-        raise InputError(f"the train split of {store.path} has no segments of a {garment}")
-    return max(counts, key=lambda g: (counts[g], -g))
-
-
-def segment_garments(store, segments: np.ndarray) -> np.ndarray:
-    """The garment instance of each segment, from the store's index (no frames read)."""
-    return store.index["garment"][store.index["segments"][np.asarray(segments, dtype=np.int64), 0]]
-
-
-def _segments(store, split: str, g: int, names=("pose", "trans", "label", "detail")) -> SegmentDataset:
-    ds = SegmentDataset(store, split, names=names)
-    ds.segments = ds.segments[segment_garments(store, ds.segments) == g]
-    if not len(ds):
-        raise InputError(f"the {split} split of {store.path} has no segments of garment instance {g} (the template); "
-                         "the regressor learns one template, so every split must hold it (paper-motion keeps the "
-                         "same garments in every split: split_disjoint = [motions])")
-    return ds
-
-
-class GrowingBatchSampler(torch.utils.data.Sampler):
-    """Shuffled batches of ``start`` items, ``step`` more every ``every`` epochs, at most ``most``
-    (§4.2: 10, +5 every 200 epochs, 25); Lightning calls :meth:`set_epoch`. Under DDP (``world``
-    processes) these are global batches: every process draws the same order and takes its share
-    (``rank::world``) of each, and a last batch too small to give every process an item is dropped."""
-
-    def __init__(self, n: int, start: int, step: int, every: int, most: int, seed: int, *, rank: int = 0,
-                 world: int = 1):
-        self.n, self.start, self.step, self.every, self.most, self.seed = n, start, step, every, most, seed
-        self.rank, self.world = rank, world
-        self.epoch = 0
-
-    def set_epoch(self, epoch: int) -> None:
-        self.epoch = int(epoch)
-
-    def batch_size(self) -> int:
-        return max(1, min(self.most, self.start + self.step * (self.epoch // self.every), self.n))
-
-    def __iter__(self):
-        g = torch.Generator().manual_seed(self.seed * 100003 + self.epoch)
-        order = torch.randperm(self.n, generator=g).tolist()
-        b = self.batch_size()
-        for k in range(0, self.n, b):
-            batch = order[k:k + b]
-            if len(batch) >= self.world:
-                yield batch[self.rank::self.world]
-
-    def __len__(self) -> int:
-        b = self.batch_size()
-        return sum(1 for k in range(0, self.n, b) if min(b, self.n - k) >= self.world)
 
 
 def _pretrain_bos(module, ds: SegmentDataset, config: GarmentConfig, device) -> list[float]:
@@ -123,37 +58,22 @@ def train_garment(data: str | Path, out: str | Path, config: GarmentConfig, *, d
 
     accelerator = resolve_device(device)
     store = open_store(data)
-    g = template_instance(store, config.garment)
-    train, val = _segments(store, "train", g), _segments(store, "val", g)
-    garment = store.garment(g)
-    meta = {"kind": KIND, "config": config.as_dict(), "template": g,
-            "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
-                      "code_version": store.attrs.get("code_version"),
-                      "schema_version": store.attrs.get("schema_version")}}
+    segments = GarmentDataModule(store, config)
+    segments.setup()
+    meta = {"kind": KIND, "config": config.as_dict(), **segments.run_meta(), "store": store_identity(store)}
     out = prepare_run(out, resume=resume, force=force, meta=meta)
     seed_everything(config.seed)
-    module = GarmentModule(config.as_dict(), len(garment["rest_vertices"]), garment["faces"])
-    module.binding = store.binding(g)  # the skinned frame's template, derived on the training device
+    module = GarmentModule.from_data(config, segments)
     dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
-    bos_losses = [] if resume else _pretrain_bos(module, train, config, dev)
+    bos_losses = [] if resume else _pretrain_bos(module, segments.train_set, config, dev)
     module.to("cpu")
-    import os
-
-    sampler = GrowingBatchSampler(len(train), config.batch_size, config.batch_growth, config.growth_every,
-                                  config.max_batch_size, config.seed, rank=int(os.environ.get("RANK", "0")),
-                                  world=int(os.environ.get("WORLD_SIZE", "1")))
-    train_loader = torch.utils.data.DataLoader(train, batch_sampler=sampler, num_workers=config.workers,
-                                               persistent_workers=config.workers > 0,
-                                               multiprocessing_context="spawn" if config.workers > 0 else None)
-    val_loader = torch.utils.data.DataLoader(val, batch_size=min(len(val), config.max_batch_size), shuffle=False)
     t0 = time.perf_counter()
-    result = fit(module, train_loader, val_loader, config, out, device=device, resume=resume, monitor="val/loss",
+    result = fit(module, segments, config, out, device=device, resume=resume, monitor="val/loss",
                  distributed_sampler=False)  # the growing sampler shares each global batch out itself
-    result |= {"seconds": time.perf_counter() - t0, "train_segments": len(train), "val_segments": len(val),
-               "template": g, "template_vertices": len(garment["rest_vertices"]),
+    result |= {"seconds": time.perf_counter() - t0, **segments.summary(),
                "bos_pretrain_loss": bos_losses[::max(1, len(bos_losses) // 10)],
                "parameters": sum(p.numel() for p in module.model.parameters())}
-    (out / "train_summary.json").write_text(json.dumps(result, indent=2))
+    write_summary(out, result)
     return result
 
 
@@ -171,7 +91,7 @@ def load_garment(run: str | Path, *, checkpoint: str = "best", data: str | Path 
 
 
 def _normals(v: torch.Tensor, faces: torch.Tensor) -> torch.Tensor:
-    from datagen.geometry.features import vertex_normals
+    from datagen.geometry.topology import vertex_normals
 
     return vertex_normals(v, faces)
 
@@ -190,7 +110,7 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     """Tables 6/7/9's figures on ``split`` for the model and the skinned template; JSON-able."""
     from training.garment.module import template_edges
     from training.metrics import hausdorff
-    from training.motion.sted import sted
+    from training.paper001.sted import sted
 
     module, meta, ckpt, store = load_garment(run, data=data)
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
@@ -199,9 +119,10 @@ def evaluate_garment(run: str | Path, *, data: str | Path | None = None, split: 
     template = store.garment(g)
     faces = torch.as_tensor(np.asarray(template["faces"], dtype=np.int64), device=dev)
     edges = torch.as_tensor(template_edges(template["faces"]), device=dev)
-    ds = _segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
+    ds = template_segments(store, split, g, names=("pose", "trans", "label", "detail", "skin"))
     from datagen.geometry.rotations import axis_angle_to_matrix
-    from training.motion.module import BodyLayer, pose_features
+    from training.paper001.body import BodyLayer
+    from training.paper001.frames import pose_features
 
     body_model = store.body_model()
     body = BodyLayer(body_model, 1).to(dev)  # the posed body, for the share of vertices inside it
@@ -349,8 +270,8 @@ def dress_motion(garment_run: str | Path, *, motion_run: str | Path | None = Non
     """
     from training.garment.contact import body_contact, inside_share, push_out
     from datagen.geometry.rotations import axis_angle_to_matrix
-    from training.motion.model import frames_to_features
-    from training.motion.module import BodyLayer
+    from training.paper001.body import BodyLayer
+    from training.paper001.frames import frames_to_features
 
     if (motion_file is None) == (label is None):
         raise InputError("give a label (with a motion-generator run) or a motion file, not both")

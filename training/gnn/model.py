@@ -27,11 +27,12 @@ straight to the detailed garment), ``no_pooling``.
 from __future__ import annotations
 
 import contextlib
+import re
 
 import torch
 from torch import nn
 
-from training.config import ABLATIONS
+from training.gnn.config import ABLATIONS
 
 OUTPUT_LIMIT = 5.0
 """Scale of the bounded output of the ``output_limit`` ablation (in the target unit)."""
@@ -82,14 +83,33 @@ class GATBlock(nn.Module):
 
 
 def _mlp(sizes: list[int], activation: type[nn.Module], last: nn.Module | None) -> nn.Sequential:
-    layers: list[nn.Module] = []
-    for k in range(len(sizes) - 1):
-        layers.append(_kaiming(nn.Linear(sizes[k], sizes[k + 1])))
-        if k < len(sizes) - 2:
-            layers.append(activation())
-    if last is not None:
-        layers.append(last)
-    return nn.Sequential(*layers)
+    """torch_geometric's ``MLP`` over ``sizes`` (``activation`` between the layers, none after the
+    last, no normalisation), Kaiming-initialised, then ``last`` (an output activation) if given."""
+    from torch_geometric.nn import MLP
+
+    with torch.random.fork_rng(devices=[]):  # built without drawing: the draws follow, layer by layer
+        mlp = MLP(sizes, act=activation(), norm=None, plain_last=True)
+    for lin in mlp.lins:
+        # the default draw and then Kaiming's, layer after layer, as torch's Linear layers drew them
+        # before: a seed gives the weights it gave before the switch to this MLP
+        lin.reset_parameters()
+        _kaiming(lin)
+    return nn.Sequential(mlp, *([last] if last is not None else []))
+
+
+LEGACY_MLP_KEY = re.compile(r"^(.*\.(?:head|net))\.(\d+)\.(weight|bias)$")
+"""A weight of the fully connected layers as runs before torch_geometric's ``MLP`` stored them
+(``head.2.weight``: the second linear layer of an ``nn.Sequential`` that interleaved activations)."""
+
+
+def upgrade_state_dict(state: dict) -> dict:
+    """A state dict of :class:`DetailAwareGNN` from a checkpoint of either layout, in the current one
+    (``head.2.weight`` -> ``head.0.lins.1.weight``)."""
+    out = {}
+    for key, value in state.items():
+        m = LEGACY_MLP_KEY.match(key)
+        out[f"{m[1]}.0.lins.{int(m[2]) // 2}.{m[3]}" if m else key] = value
+    return out
 
 
 class _Branch(nn.Module):

@@ -5,7 +5,7 @@ learn Δ_detail from the garment graph whose features come from the ground-truth
 (MSE on both, optimised together; each step's graph is independent of the other's prediction).
 Inference (validation, evaluation, prediction) chains them: the detail features (coarse normals
 and joint distances) are recomputed from the *predicted* coarse mesh with the store's feature
-function (``datagen.geometry.features``), so the validation error is the error a user gets.
+function (``datagen.features``), so the validation error is the error a user gets.
 """
 
 from __future__ import annotations
@@ -15,29 +15,47 @@ from types import SimpleNamespace
 import pytorch_lightning as pl
 import torch
 
-from datagen.geometry.features import joint_distances, vertex_normals
+from training.gnn.config import GNNConfig
+from training.gnn.features import node_features
 from training.gnn.model import DetailAwareGNN
 
 
 def detail_features(coarse: torch.Tensor, batch) -> torch.Tensor:
-    """[n, p, x] (R^30) of a batch's garments at the coarse positions ``coarse`` [N, 3]."""
-    normals = vertex_normals(coarse[None], batch.face.T)[0]
-    x = joint_distances(coarse[:, None, :], batch.joints[batch.batch])[:, 0]  # [N, J]
-    return torch.cat([normals, batch.skin, x], dim=1)
+    """[n, p, x] (R^30) of a batch's garments at the coarse positions ``coarse`` [N, 3]: the
+    dataset's :func:`~training.gnn.features.node_features` on the batch."""
+    return node_features(coarse, batch.face, batch.skin, batch.joints, batch.batch)
 
 
 class GNNModule(pl.LightningModule):
-    """The Lightning module of paper 000's GNN (config: :class:`training.config.TrainConfig` as a dict)."""
+    """The Lightning module of paper 000's GNN.
+
+    Args:
+        config: the run's :class:`~training.gnn.config.GNNConfig` (a checkpoint stores it as a dict,
+            which loading turns back into the dataclass).
+        attribute_features: length of the parser's input (α, β, θ): :attr:`GNNDataModule.attribute_features`.
+    """
 
     PREDICT_INPUTS = ("x_coarse", "edge_index", "batch", "attributes", "anchor", "face", "joints", "skin")
     """The batch's fields :meth:`predict_frames` reads (what a captured or compiled prediction takes)."""
 
-    def __init__(self, config: dict, attribute_features: int):
+    def __init__(self, config: GNNConfig | dict, attribute_features: int):
         super().__init__()
-        self.save_hyperparameters()
-        self.config = config
-        self.model = DetailAwareGNN(attribute_features=attribute_features, ablation=config["ablation"])
-        self.scale = float(config["target_scale"])
+        self.config = config if isinstance(config, GNNConfig) else GNNConfig.from_dict(config)
+        config = self.config.as_dict()  # what the checkpoint keeps (loading passes it back as a dict)
+        self.save_hyperparameters("config", "attribute_features")
+        self.model = DetailAwareGNN(attribute_features=attribute_features, ablation=self.config.ablation)
+        self.scale = float(self.config.target_scale)
+
+    @classmethod
+    def from_data(cls, config: GNNConfig, data) -> GNNModule:
+        """The module for ``data`` (a :class:`~training.gnn.data.GNNDataModule`)."""
+        return cls(config, data.attribute_features)
+
+    def on_load_checkpoint(self, checkpoint: dict) -> None:
+        """Checkpoints written before the fully connected layers were torch_geometric's ``MLP`` load too."""
+        from training.gnn.model import upgrade_state_dict
+
+        checkpoint["state_dict"] = upgrade_state_dict(checkpoint["state_dict"])
 
     # -- prediction
 
@@ -131,7 +149,6 @@ class GNNModule(pl.LightningModule):
                       sync_dist=True, on_epoch=True, on_step=False)
 
     def configure_optimizers(self):
-        opt = torch.optim.Adam(self.parameters(), lr=self.config["lr"])
-        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"],
-                                                           patience=self.config["lr_patience"])
-        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val/detail_mm"}}
+        from training.loop import plateau_optimizer
+
+        return plateau_optimizer(self, self.parameters(), self.config, "val/detail_mm")

@@ -114,6 +114,11 @@ def _pairs(edge_index: torch.Tensor, edge_score: torch.Tensor, num_nodes: int) -
 class FastEdgePooling(EdgePooling):
     """torch_geometric's ``EdgePooling`` with :func:`handshake_matching` instead of its Python loop.
 
+    ``forward`` scores the edges as ``EdgePooling.forward`` does, through its public parts (the
+    layer ``lin``, ``dropout``, ``compute_edge_score``, ``add_to_edge_score``), and merges with
+    :meth:`merge`; ``unpool`` is ``EdgePooling``'s. Nothing private of torch_geometric is
+    overridden, so a rename inside it cannot silently bring its loop back.
+
     With ``static`` set, the pooled graph has the input's sizes whatever the matching: N + 1 nodes
     (the clusters first, in the same order, then padding; the last is a sink) and as many edges as
     the input, those that coalescing would drop (repeats, and the contracted pairs' self-loops)
@@ -123,9 +128,18 @@ class FastEdgePooling(EdgePooling):
 
     static = False
 
-    def _merge_edges(self, x, edge_index, batch, edge_score):
+    def forward(self, x: torch.Tensor, edge_index: torch.Tensor, batch: torch.Tensor):
+        """(pooled x, edge_index, batch, ``UnpoolInfo`` for :meth:`unpool`), as ``EdgePooling``'s."""
+        e = torch.cat([x[edge_index[0]], x[edge_index[1]]], dim=-1)
+        e = self.lin(e).view(-1)
+        e = torch.nn.functional.dropout(e, p=self.dropout, training=self.training)
+        e = self.compute_edge_score(e, edge_index, x.size(0))
+        return self.merge(x, edge_index, batch, e + self.add_to_edge_score)
+
+    def merge(self, x, edge_index, batch, edge_score):
+        """Contract the matching of :func:`handshake_matching` on ``edge_score`` (static or dynamic)."""
         if self.static:
-            return self._merge_edges_static(x, edge_index, batch, edge_score)
+            return self._merge_static(x, edge_index, batch, edge_score)
         N = x.size(0)
         matched_edge, leader, is_pair_leader, is_single = _pairs(edge_index, edge_score, N)
         pair_leaders = torch.nonzero(is_pair_leader).flatten()
@@ -144,7 +158,7 @@ class FastEdgePooling(EdgePooling):
         return new_x, new_edge_index, new_batch, UnpoolInfo(edge_index=edge_index, cluster=cluster, batch=batch,
                                                             new_edge_score=new_edge_score)
 
-    def _merge_edges_static(self, x, edge_index, batch, edge_score):
+    def _merge_static(self, x, edge_index, batch, edge_score):
         N = x.size(0)
         sink = N
         matched_edge, leader, is_pair_leader, is_single = _pairs(edge_index, edge_score, N)

@@ -1,6 +1,6 @@
 """Train, evaluate and predict with paper 000's GNN from a dataset store (what the CLI calls).
 
-- :func:`train_gnn`: a run directory from a store and a :class:`~training.config.TrainConfig`.
+- :func:`train_gnn`: a run directory from a store and a :class:`~training.gnn.config.GNNConfig`.
 - :func:`evaluate_gnn`: the tables of paper 000 §5.2 on a split: mean per-vertex error (mm) of
   the coarse and the detailed prediction per body and over the split, and again per category of
   :func:`seen_in_training` (Table 1: garments and poses seen in training on unseen bodies; Table 2:
@@ -11,7 +11,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Any, Callable
@@ -21,63 +20,33 @@ import torch
 
 from datagen.errors import InputError
 from datagen.store import open_store
-from training.config import TrainConfig
-from training.data import FrameDataset
-from training.loop import fit, prepare_run, resolve_device, run_checkpoint, seed_everything
+from training.gnn.config import GNNConfig
+from training.gnn.data import FrameDataset
+from training.loop import (fit, prepare_run, resolve_device, run_checkpoint, seed_everything, store_identity,
+                           write_summary)
 
 KIND = "gnn"
 
 
-def _store_identity(store) -> dict:
-    return {"path": str(Path(store.path).resolve()), "seed": store.seed, "code_version": store.attrs.get("code_version"),
-            "schema_version": store.attrs.get("schema_version")}
-
-
-def _loader(ds, config: TrainConfig, *, shuffle: bool, accelerator: str):
-    """A DataLoader of ``batch_size / processes`` graphs per process (``batch_size`` is the global batch)."""
-    import os
-
-    from torch_geometric.loader import DataLoader
-
-    world = int(os.environ.get("WORLD_SIZE", "1"))
-    if config.batch_size % world:
-        raise InputError(f"batch_size {config.batch_size} is the global batch; it must divide by the {world} "
-                         "processes")
-    g = torch.Generator()
-    g.manual_seed(config.seed)
-    sampler = None
-    if shuffle and config.epoch_frames is not None and config.epoch_frames < len(ds):
-        # a fresh draw of epoch_frames frames each epoch (the generator goes on from epoch to epoch)
-        sampler, shuffle = torch.utils.data.RandomSampler(ds, num_samples=config.epoch_frames, generator=g), False
-    # spawn: the workers open the store themselves (tensorstore's threads do not survive a fork)
-    return DataLoader(ds, batch_size=config.batch_size // world, shuffle=shuffle, sampler=sampler,
-                      num_workers=config.workers, pin_memory=accelerator == "gpu",
-                      persistent_workers=config.workers > 0, generator=g,
-                      multiprocessing_context="spawn" if config.workers > 0 else None)
-
-
-def train_gnn(data: str | Path, out: str | Path, config: TrainConfig, *, device: str = "auto", resume: bool = False,
+def train_gnn(data: str | Path, out: str | Path, config: GNNConfig, *, device: str = "auto", resume: bool = False,
               force: bool = False) -> dict[str, Any]:
     """Train paper 000's GNN on ``data``'s train split, choosing the checkpoint on its val split."""
+    from training.gnn.data import GNNDataModule
     from training.gnn.module import GNNModule
 
-    accelerator = resolve_device(device)
+    resolve_device(device)
     store = open_store(data)
-    train = FrameDataset(store, "train", max_frames=config.max_train_frames, seed=config.seed)
-    # the same validation frames for every seed, so that runs' validation errors compare
-    val = FrameDataset(store, "val", max_frames=config.max_val_frames, seed=0)
-    meta = {"kind": KIND, "config": config.as_dict(), "store": _store_identity(store)}
+    frames = GNNDataModule(store, config)
+    frames.setup()
+    meta = {"kind": KIND, "config": config.as_dict(), "store": store_identity(store)}
     out = prepare_run(out, resume=resume, force=force, meta=meta)
     seed_everything(config.seed)
-    attribute_features = int(train[0].attributes.shape[1])
-    module = GNNModule(config.as_dict(), attribute_features)
+    module = GNNModule.from_data(config, frames)
     t0 = time.perf_counter()
-    result = fit(module, _loader(train, config, shuffle=True, accelerator=accelerator),
-                 _loader(val, config, shuffle=False, accelerator=accelerator), config, out, device=device,
-                 resume=resume)
-    result |= {"seconds": time.perf_counter() - t0, "train_frames": len(train), "val_frames": len(val),
+    result = fit(module, frames, config, out, device=device, resume=resume)
+    result |= {"seconds": time.perf_counter() - t0, **frames.summary(),
                "parameters": sum(p.numel() for p in module.parameters())}
-    (out / "train_summary.json").write_text(json.dumps(result, indent=2))
+    write_summary(out, result)
     return result
 
 
@@ -108,8 +77,10 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     ds = FrameDataset(store, split, max_frames=max_frames, seed=0)
     names = store.names["body_names"]
     seen = seen_in_training(store)
-    rows: dict[str, dict[str, list]] = {}
-    by_seen: dict[str, dict[str, dict[str, list]]] = {}
+    # per table row (a body, or "all") the running mean of every measure over its frames (torchmetrics'
+    # MeanMetric, in float64) and its frame count
+    rows: dict[str, FrameMeans] = {}
+    by_seen: dict[str, dict[str, FrameMeans]] = {}
     inside_total, vertex_total = 0, 0
     # the posed body, refitted frame by frame on the evaluation's device (before, each frame built a
     # new mesh on the CPU and queried it on one thread: 17 ms for 991 points on this 2-core CPU, per
@@ -147,17 +118,15 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
         # every frame's mean of every measure at once, one copy to the host per batch (not one per
         # frame and measure, each a wait for the device)
         per_frame = 1000 * scatter(torch.stack(list(errs.values()), 1), batch.batch, dim=0,
-                                   dim_size=batch.num_graphs, reduce="mean").cpu().numpy()
+                                   dim_size=batch.num_graphs, reduce="mean").cpu().double()
+        groups: dict[tuple[str | None, str], list[int]] = {}  # the batch's frames of each table row
         for k in range(batch.num_graphs):
-            body = names[int(batch.body[k])]
-            means = dict(zip(errs, per_frame[k].tolist(), strict=True))
-            category = seen[int(batch.sample[k])]
-            for table, key in ((rows, body), (rows, "all"), (by_seen.setdefault(category, {}), body),
-                               (by_seen[category], "all")):
-                r = table.setdefault(key, {m: [] for m in errs} | {"frames": []})
-                for m, v in means.items():
-                    r[m].append(v)
-                r["frames"].append(1)
+            body, category = names[int(batch.body[k])], seen[int(batch.sample[k])]
+            for row in ((None, body), (None, "all"), (category, body), (category, "all")):
+                groups.setdefault(row, []).append(k)
+        for (category, key), ks in groups.items():  # one update per row and batch
+            table = rows if category is None else by_seen.setdefault(category, {})
+            table.setdefault(key, FrameMeans(list(errs))).update(per_frame[ks])
         if collisions:  # one read (and derivation) of the posed bodies per sample, one copy of the batch
             graph = batch.batch.cpu().numpy()
             points = detail.cpu().numpy()
@@ -171,8 +140,8 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
         if progress is not None:
             progress(n_frames, len(ds))
 
-    def summary(r: dict[str, list]) -> dict[str, float]:
-        return {m: float(np.mean(v)) for m, v in r.items() if m != "frames"} | {"frames": len(r["frames"])}
+    def summary(r: FrameMeans) -> dict[str, float]:
+        return r.compute()
 
     table = {key: summary(r) for key, r in rows.items()}
     out = {"run": str(run), "checkpoint": str(ckpt), "split": split, "store": str(store.path), "frames": len(ds),
@@ -183,6 +152,28 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
            "parameters": sum(p.numel() for p in module.parameters()),
            "model_mb": sum(p.numel() * p.element_size() for p in module.parameters()) / 1e6}
     return out
+
+
+class FrameMeans:
+    """One row of the evaluation's tables: the mean of each measure over its frames (torchmetrics'
+    ``MeanMetric`` each, in float64, which also syncs across processes) and the frames counted."""
+
+    def __init__(self, measures: list[str]):
+        from torchmetrics.aggregation import MeanMetric
+
+        self.measures = measures
+        self.means = [MeanMetric().set_dtype(torch.float64) for _ in measures]
+        self.frames = 0
+
+    def update(self, values: torch.Tensor) -> None:
+        """Add frames' means [frames, measures]."""
+        for j, mean in enumerate(self.means):
+            mean.update(values[:, j])
+        self.frames += len(values)
+
+    def compute(self) -> dict[str, float]:
+        return {m: float(mean.compute()) for m, mean in zip(self.measures, self.means, strict=True)} | {
+            "frames": self.frames}
 
 
 SEEN = {(True, True): "garments and poses seen in training", (False, False): "unseen garments and poses",

@@ -1,9 +1,8 @@
 """Paper 001's body-motion generator (§3.2, Fig. 3): a Transformer conditional VAE over T-frame
 pose sequences.
 
-A frame is its 24 joint rotations in the 6D representation (``datagen.geometry.rotations``'s
-convention: the first two columns of the rotation matrix) and the root translation relative to the
-sequence's first frame: 24 x 6 + 3 = 147 numbers.
+A frame is the 147 numbers of :mod:`training.paper001.frames` (6D joint rotations and the root
+translation from the first frame).
 
 - Encoder M_E: a label encoder L_E (one-hot -> ``label_hidden``, ReLU -> 2 d_model) gives the class
   tokens μ_cls and σ_cls, put before the linear pose embeddings e_1..e_T; sinusoidal positions;
@@ -17,46 +16,15 @@ torch's ``nn.TransformerEncoder`` does the layers; this file adds only what the 
 
 from __future__ import annotations
 
-import math
-
 import torch
 from torch import nn
 
-from datagen.geometry.rotations import matrix_to_rotation_6d, rotation_6d_to_matrix
-
-JOINTS = 24
-FRAME_FEATURES = JOINTS * 6 + 3
-
-
-def sinusoidal_positions(length: int, width: int, device=None) -> torch.Tensor:
-    """The Transformer's sinusoidal position code [length, width]."""
-    position = torch.arange(length, dtype=torch.float32, device=device)[:, None]
-    rate = torch.exp(torch.arange(0, width, 2, dtype=torch.float32, device=device) * (-math.log(10000.0) / width))
-    out = torch.zeros(length, width, device=device)
-    out[:, 0::2] = torch.sin(position * rate)
-    out[:, 1::2] = torch.cos(position * rate[: width // 2])
-    return out
+from training.paper001.frames import FRAME_FEATURES, sinusoidal_positions
 
 
 def _encoder(d_model: int, heads: int, layers: int, feedforward: int, dropout: float) -> nn.TransformerEncoder:
     layer = nn.TransformerEncoderLayer(d_model, heads, feedforward, dropout, activation="relu", batch_first=True)
     return nn.TransformerEncoder(layer, layers, enable_nested_tensor=False)
-
-
-def frames_to_features(rotations: torch.Tensor, trans: torch.Tensor) -> torch.Tensor:
-    """[B, T, 24, 3, 3] rotation matrices and [B, T, 3] translations -> [B, T, 147] (translation
-    relative to each sequence's first frame)."""
-    B, T = rotations.shape[:2]
-    six = matrix_to_rotation_6d(rotations).reshape(B, T, JOINTS * 6)
-    return torch.cat([six, trans - trans[:, :1]], dim=-1)
-
-
-def features_to_frames(x: torch.Tensor) -> tuple[torch.Tensor, torch.Tensor]:
-    """[B, T, 147] -> rotation matrices [B, T, 24, 3, 3] (Gram-Schmidt of the 6D part) and the
-    translation [B, T, 3] (from the first frame)."""
-    B, T = x.shape[:2]
-    rot = rotation_6d_to_matrix(x[..., : JOINTS * 6].reshape(B, T, JOINTS, 6))
-    return rot, x[..., JOINTS * 6:]
 
 
 class MotionCVAE(nn.Module):

@@ -9,12 +9,13 @@
 Adam, and the rate times ``lr_factor`` when the validation loss has not fallen for ``lr_patience``
 epochs (§4.2).
 
-On one CUDA device the forward and backward pass of a full training batch is one CUDA graph
-(``MotionConfig.cuda_graph``): captured at the first full batch, replayed for every later one with
-the batch copied into its input tensors; the gradients it writes (into its own memory) are the
-parameters' ``.grad`` after each replay, so Lightning's clipping and Adam's step run on them as
-after an eager backward. A batch of another size (an epoch's last) runs eagerly and accumulates
-into the same tensors (zeroed in place before each step, never set to None).
+On one CUDA device the losses of a full training batch run as CUDA graphs
+(``MotionConfig.cuda_graph``): ``torch.cuda.make_graphed_callables`` captures their forward and
+backward pass at the first full batch, and every later one replays them (the batch copied into
+the graphs' inputs); autograd accumulates the replayed gradients into ``.grad`` as after an eager
+backward, so Lightning's loop (zeroing, clipping, Adam) is unchanged. A batch of another size (an
+epoch's last) runs eagerly. On the CPU, under DDP or with "16-mixed" precision (whose loss scaling
+happens in the backward) every step is eager.
 """
 
 from __future__ import annotations
@@ -22,156 +23,134 @@ from __future__ import annotations
 import pytorch_lightning as pl
 import torch
 
-from datagen.geometry.skinning import blend_skinning, rigid_transforms
-from training.motion.model import MotionCVAE, features_to_frames, frames_to_features
+from training.motion.config import MotionConfig
+from training.motion.model import MotionCVAE
+from training.paper001.body import BodyLayer
+from training.paper001.frames import features_to_frames, pose_features
 
 
-class BodyLayer(torch.nn.Module):
-    """The store's SMPL-format body as a differentiable layer: rotation matrices [N, 24, 3, 3],
-    translations [N, 3] and β [N, S] -> vertices [N, V', 3] (every ``stride``-th vertex)."""
+KEYS = ("pose", "trans", "label", "body")
+"""The batch's tensors the losses read (the graphed step's inputs)."""
 
-    def __init__(self, body: dict, stride: int = 1):
+LOSSES = ("loss", "pose", "vertex", "kl", "vertex_mm")
+
+
+def motion_losses(model: MotionCVAE, body: BodyLayer, betas: torch.Tensor, batch: dict, config: MotionConfig, *,
+                  sample: bool = True) -> dict[str, torch.Tensor]:
+    """L_B and its terms (see the module docstring) of a batch: ``loss``, ``pose``, ``vertex``, ``kl``
+    and the mean vertex error ``vertex_mm`` (mm); ``sample`` False: through the posterior mean."""
+    x, rot = pose_features(batch)
+    label = batch["label"][:, 0].long()
+    if sample:
+        out, mu, logvar = model(x, label)
+    else:  # the posterior mean: reconstruction as evaluated
+        mu, logvar = model.encode(x, label)
+        out = model.decode(mu, label, x.shape[1])
+    out = out.float()
+    mse = torch.nn.functional.mse_loss
+    pose = mse(out, x)
+    kl = -0.5 * torch.mean(torch.sum(1 + logvar - mu.pow(2) - logvar.exp(), dim=1))
+    prot, ptrans = features_to_frames(out)
+    b = batch["body"].long()
+    v_true = posed_vertices(body, betas, rot, x[..., -3:], b)
+    v_pred = posed_vertices(body, betas, prot, ptrans, b)
+    vertex = mse(v_pred, v_true)
+    total = pose + config.kl_weight * kl
+    if config.vertex_loss:
+        total = total + vertex
+    return {"loss": total, "pose": pose, "vertex": vertex, "kl": kl,
+            "vertex_mm": 1000 * (v_pred - v_true).norm(dim=-1).mean()}
+
+
+def posed_vertices(body: BodyLayer, betas: torch.Tensor, rot: torch.Tensor, trans: torch.Tensor,
+                   which: torch.Tensor) -> torch.Tensor:
+    """Posed vertices [B, T, V', 3] of rotations [B, T, 24, 3, 3], translations [B, T, 3] on the
+    bodies ``which`` [B] (rows of ``betas``)."""
+    B, T = rot.shape[:2]
+    v = body(rot.reshape(B * T, 24, 3, 3), trans.reshape(B * T, 3), betas[which].repeat_interleave(T, 0))
+    return v.reshape(B, T, -1, 3)
+
+
+class _GraphedLosses(torch.nn.Module):
+    """:func:`motion_losses` of a training batch as a module of tensors (what
+    ``make_graphed_callables`` captures), under the autocast it was captured in (without autocast's
+    cache, which a graph cannot hold)."""
+
+    def __init__(self, model: MotionCVAE, body: BodyLayer, betas: torch.Tensor, config: MotionConfig,
+                 dtype: torch.dtype | None):
         super().__init__()
-        f32 = torch.float32
-        self.parents = [int(p) for p in body["parents"]]
-        self.register_buffer("parent_index", torch.as_tensor(self.parents[1:], dtype=torch.long), persistent=False)
-        self.register_buffer("v_template", torch.as_tensor(body["v_template"], dtype=f32), persistent=False)
-        self.register_buffer("shapedirs", torch.as_tensor(body["shapedirs"], dtype=f32), persistent=False)
-        self.register_buffer("J_regressor", torch.as_tensor(body["J_regressor"], dtype=f32), persistent=False)
-        keep = torch.arange(0, len(body["v_template"]), stride)
-        self.register_buffer("keep", keep, persistent=False)
-        self.register_buffer("weights", torch.as_tensor(body["weights"], dtype=f32)[keep], persistent=False)
+        self.model, self.body, self.config, self.dtype = model, body, config, dtype
+        self.register_buffer("betas", betas, persistent=False)
 
-    def forward(self, rot: torch.Tensor, trans: torch.Tensor, betas: torch.Tensor) -> torch.Tensor:
-        S = betas.shape[-1]
-        shaped = self.v_template[None] + torch.einsum("vcs,bs->bvc", self.shapedirs[:, :, :S], betas)
-        joints = torch.einsum("jv,bvc->bjc", self.J_regressor, shaped)
-        _, rel = rigid_transforms(rot, joints, self.parents, self.parent_index)
-        return blend_skinning(shaped[:, self.keep], self.weights, rel) + trans[:, None, :]
-
-
-def pose_features(batch: dict) -> tuple[torch.Tensor, torch.Tensor]:
-    """(features [B, T, 147], rotation matrices [B, T, 24, 3, 3]) of a batch's true poses."""
-    from datagen.geometry.rotations import axis_angle_to_matrix
-
-    rot = axis_angle_to_matrix(batch["pose"].float())
-    return frames_to_features(rot, batch["trans"].float()), rot
+    def forward(self, *inputs: torch.Tensor) -> tuple[torch.Tensor, ...]:
+        with torch.autocast("cuda", dtype=self.dtype or torch.float32, enabled=self.dtype is not None,
+                            cache_enabled=False):
+            r = motion_losses(self.model, self.body, self.betas, dict(zip(KEYS, inputs, strict=True)), self.config)
+        return tuple(r[k] for k in LOSSES)
 
 
 class MotionModule(pl.LightningModule):
-    """The Lightning module of the motion generator (config: :class:`MotionConfig` as a dict)."""
+    """The Lightning module of the motion generator.
 
-    def __init__(self, config: dict, labels: int, body: dict, betas):
+    Args:
+        config: the run's :class:`~training.motion.config.MotionConfig` (a checkpoint stores it as a
+            dict, which loading turns back into the dataclass).
+        labels: motion classes.
+        body, betas: the store's body model and every body's β [bodies, S] (not saved: loading
+            takes them from the store again).
+    """
+
+    def __init__(self, config: MotionConfig | dict, labels: int, body: dict, betas):
         super().__init__()
-        self.save_hyperparameters(ignore=["body", "betas"])
-        self.config = config
-        self.model = MotionCVAE(labels, d_model=config["d_model"], heads=config["heads"], layers=config["layers"],
-                                feedforward=config["feedforward"], dropout=config["dropout"],
-                                label_hidden=config["label_hidden"])
-        self.body = BodyLayer(body, config["vertex_stride"])
+        self.config = config if isinstance(config, MotionConfig) else MotionConfig.from_dict(config)
+        config = self.config.as_dict()  # what the checkpoint keeps (loading passes it back as a dict)
+        self.save_hyperparameters("config", "labels")
+        c = self.config
+        self.model = MotionCVAE(labels, d_model=c.d_model, heads=c.heads, layers=c.layers, feedforward=c.feedforward,
+                                dropout=c.dropout, label_hidden=c.label_hidden)
+        self.body = BodyLayer(body, c.vertex_stride)
         self.register_buffer("betas", torch.as_tensor(betas, dtype=torch.float32), persistent=False)
-        self._graph = None  # (CUDAGraph, static inputs, static losses, [(parameter, its gradient)]) once captured
-        self._graphed_step = False  # whether the current training step's backward ran in the graph
+
+    @classmethod
+    def from_data(cls, config: MotionConfig, data) -> MotionModule:
+        """The module for ``data`` (a :class:`~training.motion.data.MotionDataModule`)."""
+        data.setup()
+        return cls(config, len(data.labels), data.store.body_model(), data.store.betas())
 
     def vertices(self, rot: torch.Tensor, trans: torch.Tensor, body: torch.Tensor) -> torch.Tensor:
         """Posed vertices [B, T, V', 3] of rotations [B, T, 24, 3, 3], translations [B, T, 3] on the
         bodies ``body`` [B] of the store."""
-        B, T = rot.shape[:2]
-        betas = self.betas[body].repeat_interleave(T, 0)
-        v = self.body(rot.reshape(B * T, 24, 3, 3), trans.reshape(B * T, 3), betas)
-        return v.reshape(B, T, -1, 3)
+        return posed_vertices(self.body, self.betas, rot, trans, body)
 
     def losses(self, batch: dict, *, sample: bool = True) -> dict[str, torch.Tensor]:
-        x, rot = pose_features(batch)
-        label = batch["label"][:, 0].long()
-        if sample:
-            out, mu, logvar = self.model(x, label)
-        else:  # the posterior mean: reconstruction as evaluated
-            mu, logvar = self.model.encode(x, label)
-            out = self.model.decode(mu, label, x.shape[1])
-        out = out.float()
-        mse = torch.nn.functional.mse_loss
-        pose = mse(out, x)
-        kl = -0.5 * torch.mean(torch.sum(1 + logvar - mu.pow(2) - logvar.exp(), dim=1))
-        result = {"pose": pose, "kl": kl}
-        prot, ptrans = features_to_frames(out)
-        body = batch["body"].long()
-        v_true = self.vertices(rot, x[..., -3:], body)
-        v_pred = self.vertices(prot, ptrans, body)
-        result["vertex"] = mse(v_pred, v_true)
-        result["vertex_mm"] = 1000 * (v_pred - v_true).norm(dim=-1).mean()
-        total = pose + self.config["kl_weight"] * kl
-        if self.config["vertex_loss"]:
-            total = total + result["vertex"]
-        result["loss"] = total
-        return result
+        return motion_losses(self.model, self.body, self.betas, batch, self.config, sample=sample)
 
     def _use_graph(self, batch) -> bool:
         trainer = getattr(self, "_trainer", None)
-        return (bool(self.config.get("cuda_graph", True)) and self.device.type == "cuda"
+        return (self.config.cuda_graph and self.device.type == "cuda"
                 and (trainer is None or (trainer.world_size == 1 and str(trainer.precision) != "16-mixed"))
-                and len(batch["label"]) == self.config["batch_size"])
+                and len(batch["label"]) == self.config.batch_size)
 
     def _graph_losses(self, batch: dict) -> dict[str, torch.Tensor]:
-        """Forward and backward of ``batch`` by replaying the captured graph (captured first)."""
-        if self._graph is None:
+        """The losses of ``batch`` through the CUDA graphs of :class:`_GraphedLosses` (made at the first
+        call; held outside the module tree, so neither the state dict nor ``.to`` sees them)."""
+        graphed = self.__dict__.get("_graphed")
+        inputs = tuple(batch[k] for k in KEYS)
+        if graphed is None:
             dtype = torch.get_autocast_dtype("cuda") if torch.is_autocast_enabled("cuda") else None
-            static = {k: v.clone() for k, v in batch.items()}
-
-            def forward_backward():
-                with torch.autocast("cuda", dtype=dtype or torch.float32, enabled=dtype is not None,
-                                    cache_enabled=False):
-                    r = self.losses(static)
-                r["loss"].backward()
-                return {k: v.detach() for k, v in r.items()}
-
-            side = torch.cuda.Stream()
-            side.wait_stream(torch.cuda.current_stream())
-            with torch.cuda.stream(side):  # warm-up passes (cuBLAS workspaces, autograd's caches)
-                for _ in range(3):
-                    forward_backward()
-            torch.cuda.current_stream().wait_stream(side)
-            # no gradients before the capture: the backward then allocates them in the graph's own
-            # memory and writes (not adds) them at each replay. Gradients that existed before it
-            # would be read by the graph after the capture had freed them (their memory reused
-            # by other tensors: a Lightning run trained on garbage and logged zeros)
-            params = [p for p in self.parameters() if p.requires_grad]
-            for p in params:
-                p.grad = None
-            graph = torch.cuda.CUDAGraph()
-            with torch.cuda.graph(graph):
-                out = forward_backward()
-            self._graph = (graph, static, out, [(p, p.grad) for p in params])
-        graph, static, out, grads = self._graph
-        for k, v in batch.items():
-            static[k].copy_(v)
-        graph.replay()
-        for p, g in grads:  # the optimiser reads these (whoever set .grad to None since)
-            p.grad = g
-        return out
+            losses = _GraphedLosses(self.model, self.body, self.betas, self.config, dtype)
+            with torch.autocast("cuda", enabled=False):  # the module sets its own, cache-free autocast
+                graphed = torch.cuda.make_graphed_callables(losses, tuple(t.clone() for t in inputs))
+            self.__dict__["_graphed"] = graphed
+        return dict(zip(LOSSES, graphed(*inputs), strict=True))
 
     def training_step(self, batch, _):
-        self._graphed_step = self._use_graph(batch)
-        if self._graphed_step:  # fresh copies: the graph's outputs are overwritten at each replay
-            r = {k: v.clone() for k, v in self._graph_losses(batch).items()}
-        else:
-            r = self.losses(batch)
+        r = self._graph_losses(batch) if self._use_graph(batch) else self.losses(batch)
         n = len(batch["label"])
         for k in ("loss", "pose", "vertex", "kl"):
             self.log(f"train/{k}", r[k], batch_size=n, prog_bar=k == "loss", sync_dist=True, on_epoch=True,
                      on_step=k == "loss")
         return r["loss"]
-
-    def backward(self, loss, *args, **kwargs):
-        if not self._graphed_step:  # a replayed step's backward ran in the graph
-            super().backward(loss, *args, **kwargs)
-
-    def optimizer_zero_grad(self, epoch, batch_idx, optimizer):
-        # Lightning zeroes between the training step and the backward: a replayed step has written
-        # its gradients already (and they are written, not added, so nothing needs zeroing); an
-        # eager step accumulates into the graph's gradient tensors, zeroed in place
-        if not self._graphed_step:
-            optimizer.zero_grad(set_to_none=self._graph is None)
 
     def validation_step(self, batch, _):
         r = self.losses(batch, sample=False)
@@ -180,9 +159,7 @@ class MotionModule(pl.LightningModule):
         self.log("val/vertex_mm", r["vertex_mm"], batch_size=n, prog_bar=True, sync_dist=True)
 
     def configure_optimizers(self):
-        opt = torch.optim.Adam(self.parameters(), lr=self.config["lr"])
-        from training.loop import plateau_patience
+        from training.loop import plateau_optimizer
 
-        patience = plateau_patience(self, self.config["lr_patience"], self.config.get("lr_patience_steps"))
-        sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=self.config["lr_factor"], patience=patience)
-        return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": "val/loss"}}
+        return plateau_optimizer(self, self.parameters(), self.config, "val/loss",
+                                 patience_steps=self.config.lr_patience_steps)

@@ -26,7 +26,7 @@ import numpy as np
 import torch
 from torch import nn
 
-from training.motion.model import FRAME_FEATURES
+from training.paper001.frames import FRAME_FEATURES
 
 
 class Recognizer(nn.Module):

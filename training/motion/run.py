@@ -7,7 +7,7 @@
 - :func:`evaluate_motion`: Table 3's reconstruction figures on a split's unseen segments (the
   posterior mean decoded): RMSE of the pose parameters (axis-angle, rad) and of the body vertices
   (m), the Hausdorff distance between predicted and true vertex sets (m, mean over frames), STED
-  on the whole body mesh (:mod:`training.motion.sted`, mean over segments), beside
+  on the whole body mesh (:mod:`training.paper001.sted`, mean over segments), beside
   a trivial baseline (every frame the label's mean pose over the training segments, the true
   translation) and a static oracle (every frame the test segment's own mean pose, the true
   translation: what a model that has learned each sequence's pose but none of its motion scores).
@@ -21,7 +21,6 @@
 
 from __future__ import annotations
 
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -31,45 +30,14 @@ import torch
 
 from datagen.errors import InputError
 from datagen.store import open_store
-from training.data import MotionSegmentDataset
-from training.loop import fit, prepare_run, resolve_device, run_checkpoint, seed_everything
+from training.loop import (fit, prepare_run, resolve_device, run_checkpoint, seed_everything, store_identity,
+                           write_summary)
 from training.motion.config import MotionConfig
+from training.motion.data import MotionDataModule, labelled_segments
+from training.paper001.data import MotionSegmentDataset
 
 KIND = "motion"
 LATENTS = ("posterior", "prior")
-
-
-def _segments(store, split: str) -> MotionSegmentDataset:
-    """The labelled segments of the split's motions, once per (motion, body), whether their scenes
-    passed or failed: paper 001 trains on labelled motions (unlabelled mocap is -1), and a store
-    simulates every motion under several garments (``paper-motion``: a skirt, a T-shirt and pants)
-    whose segments hold the same poses; counting those would weight the motions whose garments
-    passed and lose those whose garments all failed."""
-    ds = MotionSegmentDataset(store, split)
-    if not len(ds):
-        raise InputError(f"the {split} split of {store.path} has no labelled motion segments (label >= 0); the "
-                         "motion generator learns labelled motions")
-    return ds
-
-
-def _loader(ds, config: MotionConfig, *, shuffle: bool):
-    import os
-
-    world = int(os.environ.get("WORLD_SIZE", "1"))
-    if config.batch_size % world:
-        raise InputError(f"batch_size {config.batch_size} is the global batch; it must divide by the {world} processes")
-    g = torch.Generator()
-    g.manual_seed(config.seed)
-    return torch.utils.data.DataLoader(ds, batch_size=max(1, min(config.batch_size // world, len(ds))), shuffle=shuffle,
-                                       num_workers=config.workers, persistent_workers=config.workers > 0,
-                                       generator=g, multiprocessing_context="spawn" if config.workers > 0 else None)
-
-
-def _label_names(store) -> list[str]:
-    names = store.attrs.get("label_names") or []
-    if not names:
-        raise InputError(f"{store.path} has no label names; the motion generator needs labelled motions")
-    return list(names)
 
 
 def train_motion(data: str | Path, out: str | Path, config: MotionConfig, *, device: str = "auto",
@@ -79,24 +47,21 @@ def train_motion(data: str | Path, out: str | Path, config: MotionConfig, *, dev
 
     resolve_device(device)
     store = open_store(data)
-    labels = _label_names(store)
-    train, val = _segments(store, "train"), _segments(store, "val")
+    segments = MotionDataModule(store, config)
+    segments.setup()
+    labels = segments.labels
     unseen = [name for name, c in zip(labels, train_label_counts(store, len(labels))) if c == 0]
-    meta = {"kind": KIND, "config": config.as_dict(), "labels": labels,
-            "store": {"path": str(Path(store.path).resolve()), "seed": store.seed,
-                      "code_version": store.attrs.get("code_version"),
-                      "schema_version": store.attrs.get("schema_version")},
-            "fps": float(store.attrs["config"].get("fps", 30.0)), "frames": int(store.segment_length)}
+    meta = {"kind": KIND, "config": config.as_dict(), "labels": labels, "store": store_identity(store),
+            **{k: v for k, v in segments.run_meta().items() if k != "labels"}}
     out = prepare_run(out, resume=resume, force=force, meta=meta)
     seed_everything(config.seed)
-    module = MotionModule(config.as_dict(), len(labels), store.body_model(), store.betas())
+    module = MotionModule.from_data(config, segments)
     t0 = time.perf_counter()
-    result = fit(module, _loader(train, config, shuffle=True), _loader(val, config, shuffle=False), config, out,
-                 device=device, resume=resume, monitor="val/loss")
-    result |= {"seconds": time.perf_counter() - t0, "train_segments": len(train), "val_segments": len(val),
+    result = fit(module, segments, config, out, device=device, resume=resume, monitor="val/loss")
+    result |= {"seconds": time.perf_counter() - t0, **segments.summary(),
                "parameters": sum(p.numel() for p in module.model.parameters()),
                "labels_without_training_segments": unseen}
-    (out / "train_summary.json").write_text(json.dumps(result, indent=2))
+    write_summary(out, result)
     return result
 
 
@@ -113,10 +78,10 @@ def load_motion(run: str | Path, *, checkpoint: str = "best", data: str | Path |
 
 def _split_tensors(store, split: str, device) -> tuple[torch.Tensor, torch.Tensor]:
     """Frame features [N, T, 147] and labels [N] of a split's labelled segments."""
-    from training.motion.module import pose_features
+    from training.paper001.frames import pose_features
 
     xs, ys = [], []
-    for batch in torch.utils.data.DataLoader(_segments(store, split), batch_size=64, shuffle=False):
+    for batch in torch.utils.data.DataLoader(labelled_segments(store, split), batch_size=64, shuffle=False):
         xs.append(pose_features(batch)[0])
         ys.append(batch["label"][:, 0].long())
     return torch.cat(xs).to(device), torch.cat(ys).to(device)
@@ -177,12 +142,12 @@ def label_gaussians(mu: torch.Tensor, logvar: torch.Tensor, label: torch.Tensor,
 @torch.no_grad()
 def fit_latents(module, store, device=None) -> dict[str, np.ndarray]:
     """:func:`label_gaussians` of the training split's posteriors under ``module``'s encoder."""
-    from training.motion.module import pose_features
+    from training.paper001.frames import pose_features
 
     dev = device or torch.device("cpu")
     module.to(dev)
     mus, logvars, labels = [], [], []
-    for batch in torch.utils.data.DataLoader(_segments(store, "train"), batch_size=64, shuffle=False):
+    for batch in torch.utils.data.DataLoader(labelled_segments(store, "train"), batch_size=64, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
         x, _ = pose_features(batch)
         label = batch["label"][:, 0].long()
@@ -193,7 +158,7 @@ def fit_latents(module, store, device=None) -> dict[str, np.ndarray]:
 
 def train_label_counts(store, labels: int) -> np.ndarray:
     """Labelled training segments per label [labels], from the store's index and motion table."""
-    return np.bincount(_segments(store, "train").labels, minlength=labels)
+    return np.bincount(labelled_segments(store, "train").labels, minlength=labels)
 
 
 def _posterior_fit(loaded, device=None) -> dict[str, np.ndarray]:
@@ -236,10 +201,10 @@ def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
     """Reconstruction on ``split`` (see the module docstring) for the model and the baseline; JSON-able."""
     from datagen.geometry.rotations import axis_angle_to_matrix, matrix_to_axis_angle
     from training.metrics import hausdorff
-    from training.motion.model import features_to_frames
-    from training.motion.module import BodyLayer, pose_features
+    from training.paper001.body import BodyLayer
+    from training.paper001.frames import features_to_frames, pose_features
     from training.motion.recognition import motion_speed
-    from training.motion.sted import mesh_edges, sted
+    from training.paper001.sted import mesh_edges, sted
 
     module, meta, ckpt, store = loaded
     module.to(dev)
@@ -251,8 +216,8 @@ def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
         B, T = rot.shape[:2]
         v = full(rot.reshape(B * T, 24, 3, 3), trans.reshape(B * T, 3), module.betas[body].repeat_interleave(T, 0))
         return v.reshape(B, T, -1, 3)
-    test = _segments(store, split)
-    mean_pose = _mean_poses(_segments(store, "train"), len(meta["labels"])).to(dev)
+    test = labelled_segments(store, split)
+    mean_pose = _mean_poses(labelled_segments(store, "train"), len(meta["labels"])).to(dev)
     rows = ("model", "mean_pose_baseline", "own_mean_pose")
     sums = {r: {"pose_sq": 0.0, "vertex_sq": 0.0, "hausdorff": 0.0, "sted": 0.0} for r in rows}
     speed = {"model": [], "real": []}  # Table 4's speed of the reconstructions and of the true segments
@@ -419,7 +384,7 @@ def sample_sequences(run, label: str, count: int, seed: int, *, device: str = "c
     positions extend, but it has only learned the trained length. ``latent``: ``posterior`` (the
     per-label fit, default) or ``prior`` (N(0, I), the paper's), :func:`label_latents`."""
     from datagen.geometry.rotations import matrix_to_axis_angle
-    from training.motion.model import features_to_frames
+    from training.paper001.frames import features_to_frames
 
     if count < 1:
         raise InputError(f"--count must be 1 or more, got {count}")

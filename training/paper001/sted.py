@@ -18,12 +18,12 @@ from __future__ import annotations
 import numpy as np
 import torch
 
+from datagen.geometry.topology import unique_edges
+
 
 def mesh_edges(faces: np.ndarray) -> np.ndarray:
     """The unique undirected edges [E, 2] of triangles ``faces`` [F, 3]."""
-    f = np.asarray(faces, dtype=np.int64)
-    e = np.concatenate([f[:, [0, 1]], f[:, [1, 2]], f[:, [2, 0]]])
-    return np.unique(np.sort(e, axis=1), axis=0)
+    return unique_edges(faces)
 
 
 def sted(pred: torch.Tensor, true: torch.Tensor, edges: torch.Tensor) -> dict[str, torch.Tensor]:
