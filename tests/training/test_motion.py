@@ -309,8 +309,7 @@ def test_the_graphed_training_step_gives_the_eager_gradients(monkeypatch):
             for p in m.parameters():
                 if p.grad is not None:
                     p.grad.zero_()
-        loss_g = graphed._graph_losses(batch)["loss"]
-        loss_g.backward()  # replays the captured backward pass
+        loss_g = graphed._graph_losses(batch)["loss"]  # the replay runs the backward pass too
         loss_e = eager.losses(batch)["loss"]
         loss_e.backward()
         assert torch.allclose(loss_g, loss_e.detach(), rtol=1e-4), k

@@ -9,13 +9,18 @@
 Adam, and the rate times ``lr_factor`` when the validation loss has not fallen for ``lr_patience``
 epochs (§4.2).
 
-On one CUDA device the losses of a full training batch run as CUDA graphs
-(``MotionConfig.cuda_graph``): ``torch.cuda.make_graphed_callables`` captures their forward and
-backward pass at the first full batch, and every later one replays them (the batch copied into
-the graphs' inputs); autograd accumulates the replayed gradients into ``.grad`` as after an eager
-backward, so Lightning's loop (zeroing, clipping, Adam) is unchanged. A batch of another size (an
-epoch's last) runs eagerly. On the CPU, under DDP or with "16-mixed" precision (whose loss scaling
-happens in the backward) every step is eager.
+On one CUDA device the forward and backward pass of a full training batch is one CUDA graph
+(``MotionConfig.cuda_graph``): captured at the first full batch, replayed for every later one with
+the batch copied into its input tensors; the gradients it writes (into its own memory) are the
+parameters' ``.grad`` after each replay, so Lightning's clipping and Adam's step run on them as
+after an eager backward. A batch of another size (an epoch's last) runs eagerly and accumulates
+into the same tensors (zeroed in place before each step, never set to None). On the CPU, under DDP
+or with "16-mixed" precision (whose loss scaling happens in the backward) every step is eager.
+
+``torch.cuda.make_graphed_callables`` was tried in its place (issue 58) and not kept: on an H200 it
+trained 0.70x as fast in bf16-mixed (1,648 against 2,362 segments/s) and 0.95x in float32, and the
+gradients it hands to autograd become ``.grad`` itself, so a step that zeroes in place doubles them
+(docs/bench/house_refactor_h200/motion_graph_gpu.txt).
 """
 
 from __future__ import annotations
@@ -27,12 +32,6 @@ from training.motion.config import MotionConfig
 from training.motion.model import MotionCVAE
 from training.paper001.body import BodyLayer
 from training.paper001.frames import features_to_frames, pose_features
-
-
-KEYS = ("pose", "trans", "label", "body")
-"""The batch's tensors the losses read (the graphed step's inputs)."""
-
-LOSSES = ("loss", "pose", "vertex", "kl", "vertex_mm")
 
 
 def motion_losses(model: MotionCVAE, body: BodyLayer, betas: torch.Tensor, batch: dict, config: MotionConfig, *,
@@ -71,24 +70,6 @@ def posed_vertices(body: BodyLayer, betas: torch.Tensor, rot: torch.Tensor, tran
     return v.reshape(B, T, -1, 3)
 
 
-class _GraphedLosses(torch.nn.Module):
-    """:func:`motion_losses` of a training batch as a module of tensors (what
-    ``make_graphed_callables`` captures), under the autocast it was captured in (without autocast's
-    cache, which a graph cannot hold)."""
-
-    def __init__(self, model: MotionCVAE, body: BodyLayer, betas: torch.Tensor, config: MotionConfig,
-                 dtype: torch.dtype | None):
-        super().__init__()
-        self.model, self.body, self.config, self.dtype = model, body, config, dtype
-        self.register_buffer("betas", betas, persistent=False)
-
-    def forward(self, *inputs: torch.Tensor) -> tuple[torch.Tensor, ...]:
-        with torch.autocast("cuda", dtype=self.dtype or torch.float32, enabled=self.dtype is not None,
-                            cache_enabled=False):
-            r = motion_losses(self.model, self.body, self.betas, dict(zip(KEYS, inputs, strict=True)), self.config)
-        return tuple(r[k] for k in LOSSES)
-
-
 class MotionModule(pl.LightningModule):
     """The Lightning module of the motion generator.
 
@@ -110,6 +91,8 @@ class MotionModule(pl.LightningModule):
                                 dropout=c.dropout, label_hidden=c.label_hidden)
         self.body = BodyLayer(body, c.vertex_stride)
         self.register_buffer("betas", torch.as_tensor(betas, dtype=torch.float32), persistent=False)
+        self._graph = None  # (CUDAGraph, static inputs, static losses, [(parameter, its gradient)]) once captured
+        self._graphed_step = False  # whether the current training step's backward ran in the graph
 
     @classmethod
     def from_data(cls, config: MotionConfig, data) -> MotionModule:
@@ -132,25 +115,65 @@ class MotionModule(pl.LightningModule):
                 and len(batch["label"]) == self.config.batch_size)
 
     def _graph_losses(self, batch: dict) -> dict[str, torch.Tensor]:
-        """The losses of ``batch`` through the CUDA graphs of :class:`_GraphedLosses` (made at the first
-        call; held outside the module tree, so neither the state dict nor ``.to`` sees them)."""
-        graphed = self.__dict__.get("_graphed")
-        inputs = tuple(batch[k] for k in KEYS)
-        if graphed is None:
+        """Forward and backward of ``batch`` by replaying the captured graph (captured first)."""
+        if self._graph is None:
             dtype = torch.get_autocast_dtype("cuda") if torch.is_autocast_enabled("cuda") else None
-            losses = _GraphedLosses(self.model, self.body, self.betas, self.config, dtype)
-            with torch.autocast("cuda", enabled=False):  # the module sets its own, cache-free autocast
-                graphed = torch.cuda.make_graphed_callables(losses, tuple(t.clone() for t in inputs))
-            self.__dict__["_graphed"] = graphed
-        return dict(zip(LOSSES, graphed(*inputs), strict=True))
+            static = {k: v.clone() for k, v in batch.items()}
+
+            def forward_backward():
+                with torch.autocast("cuda", dtype=dtype or torch.float32, enabled=dtype is not None,
+                                    cache_enabled=False):
+                    r = self.losses(static)
+                r["loss"].backward()
+                return {k: v.detach() for k, v in r.items()}
+
+            side = torch.cuda.Stream()
+            side.wait_stream(torch.cuda.current_stream())
+            with torch.cuda.stream(side):  # warm-up passes (cuBLAS workspaces, autograd's caches)
+                for _ in range(3):
+                    forward_backward()
+            torch.cuda.current_stream().wait_stream(side)
+            # no gradients before the capture: the backward then allocates them in the graph's own
+            # memory and writes (not adds) them at each replay. Gradients that existed before it
+            # would be read by the graph after the capture had freed them (their memory reused
+            # by other tensors: a Lightning run trained on garbage and logged zeros)
+            params = [p for p in self.parameters() if p.requires_grad]
+            for p in params:
+                p.grad = None
+            graph = torch.cuda.CUDAGraph()
+            with torch.cuda.graph(graph):
+                out = forward_backward()
+            self._graph = (graph, static, out, [(p, p.grad) for p in params])
+        graph, static, out, grads = self._graph
+        for k, v in batch.items():
+            static[k].copy_(v)
+        graph.replay()
+        for p, g in grads:  # the optimiser reads these (whoever set .grad to None since)
+            p.grad = g
+        return out
 
     def training_step(self, batch, _):
-        r = self._graph_losses(batch) if self._use_graph(batch) else self.losses(batch)
+        self._graphed_step = self._use_graph(batch)
+        if self._graphed_step:  # fresh copies: the graph's outputs are overwritten at each replay
+            r = {k: v.clone() for k, v in self._graph_losses(batch).items()}
+        else:
+            r = self.losses(batch)
         n = len(batch["label"])
         for k in ("loss", "pose", "vertex", "kl"):
             self.log(f"train/{k}", r[k], batch_size=n, prog_bar=k == "loss", sync_dist=True, on_epoch=True,
                      on_step=k == "loss")
         return r["loss"]
+
+    def backward(self, loss, *args, **kwargs):
+        if not self._graphed_step:  # a replayed step's backward ran in the graph
+            super().backward(loss, *args, **kwargs)
+
+    def optimizer_zero_grad(self, epoch, batch_idx, optimizer):
+        # Lightning zeroes between the training step and the backward: a replayed step has written
+        # its gradients already (and they are written, not added, so nothing needs zeroing); an
+        # eager step accumulates into the graph's gradient tensors, zeroed in place
+        if not self._graphed_step:
+            optimizer.zero_grad(set_to_none=self._graph is None)
 
     def validation_step(self, batch, _):
         r = self.losses(batch, sample=False)
