@@ -23,7 +23,7 @@ import torch
 
 def main(argv=None) -> int:
     from training.garment.model import GarmentRegressor
-    from training.motion.model import FRAME_FEATURES
+    from training.paper001.frames import FRAME_FEATURES
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--device", default="cpu")

@@ -18,7 +18,7 @@ import time
 
 import torch
 
-from training.config import TrainConfig
+from training.gnn.config import GNNConfig
 from training.gnn.module import GNNModule
 
 
@@ -102,7 +102,7 @@ def main(argv=None) -> None:
     from torch_geometric.data import Batch
 
     dev = torch.device(args.device)
-    module = GNNModule(TrainConfig(ablation=args.ablation).as_dict(), 85).to(dev)
+    module = GNNModule(GNNConfig(ablation=args.ablation), 85).to(dev)
     params = sum(p.numel() for p in module.parameters())
     parts = {name: sum(p.numel() * p.element_size() for p in m.parameters()) / 1e6
              for name, m in (("W_coarse", module.model.coarse), ("W_detail + W_parser", module.model.detail))

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import numpy as np
 
-from training.loop import read_metrics
+from training.loop import THROUGHPUT_KEY, read_metrics
 
 
 def run_figures(run: Path) -> dict:
@@ -27,7 +27,8 @@ def run_figures(run: Path) -> dict:
     the median training rate, the ablation, and the test errors where evaluated."""
     curve = read_metrics(run, "val/detail_mm")
     coarse = read_metrics(run, "val/coarse_mm")
-    rates = list(read_metrics(run, "train/samples_per_s").values())
+    # runs written before Lightning's ThroughputMonitor (commit 29fca84) logged "train/samples_per_s"
+    rates = list((read_metrics(run, THROUGHPUT_KEY) or read_metrics(run, "train/samples_per_s")).values())
     meta = json.loads((run / "run.json").read_text())
     out = {"run": str(run), "ablation": meta["config"]["ablation"], "seed": meta["config"]["seed"],
            "curve": curve, "coarse_curve": coarse, "epochs": len(curve),

@@ -1,7 +1,8 @@
 """Paper 000's training input from a store against the same frames held in memory, in one run.
 
-The loader of ``drape train gnn`` (``training.gnn.run._loader``: torch_geometric's DataLoader over
-:class:`~training.data.FrameDataset`, spawned workers that open the store and derive the features)
+The loader of ``drape train gnn`` (:meth:`training.gnn.data.GNNDataModule.train_dataloader`:
+torch_geometric's DataLoader over :class:`~training.gnn.data.FrameDataset`, spawned workers that open
+the store and derive the features)
 against a DataLoader over the same frames built beforehand and kept as ``Data`` objects (only
 batching left). Figures are frames per second over whole passes, after one warm-up pass (which
 starts the workers). If the first is well above a training step's rate (``gnn``: 110-186
@@ -15,9 +16,9 @@ from __future__ import annotations
 import argparse
 import time
 
-from training.config import TrainConfig
-from training.data import FrameDataset
-from training.gnn.run import _loader
+from datagen.store import open_store
+from training.gnn.config import GNNConfig
+from training.gnn.data import FrameDataset, GNNDataModule
 
 
 def rate(loader, passes: int) -> float:
@@ -39,7 +40,8 @@ def main(argv=None) -> None:
     ap.add_argument("--batch", type=int, default=8)
     ap.add_argument("--passes", type=int, default=2)
     args = ap.parse_args(argv)
-    ds = FrameDataset(args.store, "train", max_frames=args.frames)
+    store = open_store(args.store)
+    ds = FrameDataset(store, "train", max_frames=args.frames)
     t0 = time.perf_counter()
     memory = [ds[k] for k in range(len(ds))]
     build = len(memory) / (time.perf_counter() - t0)
@@ -48,8 +50,8 @@ def main(argv=None) -> None:
           f"batch {args.batch}; {args.passes} timed passes after a warm-up")
     print(f"one frame read and derived in this process: {build:.1f} frames/s")
     for w in (int(x) for x in args.workers.split(",")):
-        config = TrainConfig(batch_size=args.batch, workers=w)
-        from_store = rate(_loader(ds, config, shuffle=True, accelerator="cpu"), args.passes)
-        in_memory = rate(_loader(memory, config, shuffle=True, accelerator="cpu"), args.passes)
+        data = GNNDataModule(store, GNNConfig(batch_size=args.batch, workers=w))
+        from_store = rate(data.loader(ds, shuffle=True, graphs=True), args.passes)
+        in_memory = rate(data.loader(memory, shuffle=True, graphs=True), args.passes)
         print(f"workers {w}: from the store {from_store:8.1f} frames/s | in memory {in_memory:8.1f} frames/s | "
               f"ratio {from_store / in_memory:.2f}")

@@ -17,8 +17,8 @@ import torch
 def main(argv=None) -> int:
     from datagen.body.cache import default_body
     from training.motion.config import MotionConfig
-    from training.motion.model import features_to_frames
     from training.motion.module import MotionModule
+    from training.paper001.frames import features_to_frames
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--device", default="cpu")
@@ -28,8 +28,7 @@ def main(argv=None) -> int:
     dev = torch.device(args.device)
     body = default_body()
     arrays = {k: getattr(body, k) for k in ("v_template", "shapedirs", "J_regressor", "weights", "parents")}
-    cfg = MotionConfig().as_dict()
-    module = MotionModule(cfg, 17, arrays, torch.zeros(1, body.shape_dim)).to(dev).eval()
+    module = MotionModule(MotionConfig(), 17, arrays, torch.zeros(1, body.shape_dim)).to(dev).eval()
     params = sum(p.numel() for p in module.model.parameters())
     print(f"motion generator: {params:,} parameters ({params * 4 / 2**20:.1f} MiB float32), device {dev}, "
           f"torch {torch.__version__}, {torch.get_num_threads()} CPU threads")

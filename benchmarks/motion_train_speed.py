@@ -8,8 +8,9 @@ Prints segments/s of each, so that the training's own rate (``train_summary.json
 apart: loader-bound, step-bound or neither (Lightning's own overhead). The optimiser step is timed
 per mode: ``eager`` (every operation launched from Python, as the training runs today),
 ``compile`` (the loss through ``torch.compile(mode="reduce-overhead")``, fused Adam) and ``graph``
-(the forward and backward pass replayed as the module's CUDA graph, ``MotionConfig.cuda_graph``,
-then clipping and Adam eagerly, as training runs it; CUDA only)."""
+(the forward and backward pass replayed as the module's CUDA graphs, ``MotionConfig.cuda_graph``:
+``torch.cuda.make_graphed_callables``, the backward replayed by ``loss.backward()``; then clipping and
+Adam eagerly, as training runs it; CUDA only)."""
 from __future__ import annotations
 
 import argparse
@@ -29,12 +30,12 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     from datagen.store import open_store
     from training.motion.config import MotionConfig
+    from training.motion.data import label_names, labelled_segments
     from training.motion.module import MotionModule
-    from training.motion.run import _segments
 
     dev = torch.device(args.device)
     store = open_store(args.store)
-    ds = _segments(store, "train")
+    ds = labelled_segments(store, "train")
     loader = torch.utils.data.DataLoader(ds, batch_size=args.batch, shuffle=True, num_workers=args.workers, drop_last=True,
                                          persistent_workers=args.workers > 0,
                                          multiprocessing_context="spawn" if args.workers else None)
@@ -53,12 +54,12 @@ def main(argv=None) -> None:
     t = time.perf_counter()
     n = sum(len(b["label"]) for b in batches(args.steps))
     print(f"loader alone ({args.workers} workers): {n / (time.perf_counter() - t):8.1f} segments/s")
-    cfg = MotionConfig().as_dict()
+    cfg = MotionConfig()
     fixed = {k: v.to(dev) for k, v in next(iter(loader)).items()}
     amp = dict(device_type=dev.type, dtype=torch.bfloat16, enabled=dev.type == "cuda")
     for mode in args.modes.split(","):
         torch.manual_seed(0)
-        module = MotionModule(cfg, len(store.attrs["label_names"]), store.body_model(), store.betas()).to(dev)
+        module = MotionModule(cfg, len(label_names(store)), store.body_model(), store.betas()).to(dev)
         cuda = dev.type == "cuda"
         opt = torch.optim.Adam(module.parameters(), lr=1e-4, fused=cuda and mode == "compile")
         losses = torch.compile(module.losses, mode="reduce-overhead") if mode == "compile" else module.losses
@@ -78,12 +79,13 @@ def main(argv=None) -> None:
                 continue
             opt = torch.optim.Adam(module.parameters(), lr=1e-4)
 
-            def run(batch):  # as training runs it: the module's graph, then clipping and Adam eagerly
+            def run(batch):  # as training runs it: the graphed forward and backward, then clipping and Adam eagerly
+                opt.zero_grad(set_to_none=True)
                 with torch.autocast(**amp):
                     loss = module._graph_losses(batch)["loss"]
+                loss.backward()  # replays the captured backward graph (make_graphed_callables)
                 torch.nn.utils.clip_grad_norm_(module.parameters(), 1.0)
                 opt.step()
-                opt.zero_grad(set_to_none=False)
                 return loss
 
             t = time.perf_counter()

@@ -30,18 +30,19 @@ def main(argv=None) -> int:
 
     from datagen.geometry.rotations import axis_angle_to_matrix
     from datagen.store import open_store
-    from training.motion.model import frames_to_features
+    from training.motion.data import label_names, labelled_segments
     from training.motion.recognition import generation_metrics, train_recognizer
-    from training.motion.run import _label_names, _mean_poses, _segments, _split_tensors
+    from training.motion.run import _mean_poses, _split_tensors  # private: training has no public name for these
+    from training.paper001.frames import frames_to_features
 
     store = open_store(args.store)
-    labels = len(_label_names(store))
+    labels = len(label_names(store))
     x_train, y_train = _split_tensors(store, "train", "cpu")
     x_test, y_test = _split_tensors(store, args.split, "cpu")
     T = x_test.shape[1]
     torch.manual_seed(0)
     recognizer = train_recognizer(x_train, y_train, labels, epochs=args.recognizer_epochs, seed=0)
-    mean = axis_angle_to_matrix(_mean_poses(_segments(store, "train"), labels))  # [labels, 24, 3, 3]
+    mean = axis_angle_to_matrix(_mean_poses(labelled_segments(store, "train"), labels))  # [labels, 24, 3, 3]
 
     def still(lab: torch.Tensor, g: torch.Generator) -> torch.Tensor:
         rot = mean[lab][:, None].expand(-1, T, -1, -1, -1)

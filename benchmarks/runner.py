@@ -73,6 +73,9 @@ CASES: tuple[Case, ...] = (
          summary="drape train gnn's loader from a store against the same frames in memory, frames/s"),
     Case(name="gnn-ablations", module="benchmarks.gnn_ablations", needs="drape train gnn run directories",
          summary="paper 000's Figure 10 (validation detail error per epoch per ablation) and its table"),
+    # training
+    Case(name="train-throughput", module="benchmarks.train_throughput", needs="a store",
+         summary="training throughput of the three model kinds on the CPU through Lightning's loop, samples/s and frames/s"),
     # sewing patterns
     Case(name="pattern-survey", module="benchmarks.pattern_survey",
          summary="random pattern designs x thin/regular/fat: how many build, mesh, place and pass the checks; time, vertices, angles"),

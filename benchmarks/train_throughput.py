@@ -1,13 +1,13 @@
 """Training throughput of drape's three models: samples per second over N optimiser steps after a
 warm-up, through Lightning's loop, on one small store, from one seed.
 
-Each model is built as its ``drape train`` builds it (the kind's config with the given batch size,
-its LightningModule, its training loader) and trained for ``--warmup + --steps`` optimiser steps by a
-Lightning ``Trainer`` (gradient clipping at 1.0 as ``training.loop.fit`` has it; no validation, no
-checkpoints, no logger); the clock runs from the first step after the warm-up to the last. A sample
+Each model is built as its ``drape train`` builds it (the kind's record in ``training.kinds``: its
+config with the given batch size, its data module's training loader, its LightningModule) and
+trained for ``--warmup + --steps`` optimiser steps by a Lightning ``Trainer`` (gradient clipping at
+1.0 as ``training.loop.fit`` has it; no validation, no checkpoints, no logger); the clock runs from the first step after the warm-up to the last. A sample
 is a frame (paper 000's GNN) or a segment (paper 001's models; frames = segments x segment length).
 
-    python benchmarks/train_throughput.py --data STORE --garment-data STORE2 [--steps 20] [--warmup 3]
+    python -m benchmarks train-throughput --data STORE --garment-data STORE2 [--steps 20] [--warmup 3]
 
 STORE is a store with fit attributes and labelled motions (the GNN and the motion generator), e.g.
 the training tests' micro store (``tests/training/conftest.py``'s MICRO_TRAIN); STORE2 one with a
@@ -26,14 +26,13 @@ GARMENT = "skirt"
 
 
 def _build(kind: str, store, batch_size: int, seed: int, threads: int):
-    """(LightningModule, training DataLoader, frames per sample) of ``kind`` on ``store``'s train split."""
+    """(LightningModule, training DataLoader, frames per sample) of ``kind`` on ``store``'s train split,
+    as ``drape train KIND`` builds them: the registry's config, data module and module."""
     import torch
 
+    from training.kinds import get_kind
+
     torch.set_num_threads(threads)
-    try:
-        from training.kinds import get_kind
-    except ImportError:  # the code before the model-kind registry (commit 62ea0bb)
-        return _build_before(kind, store, batch_size, seed)
     record = get_kind(kind)
     fields = {"batch_size": batch_size, "seed": seed, "workers": 0, "precision": "32"}
     if kind == "garment":
@@ -46,46 +45,11 @@ def _build(kind: str, store, batch_size: int, seed: int, threads: int):
     return module, data.train_dataloader(), frames
 
 
-def _build_before(kind: str, store, batch_size: int, seed: int):
-    """The same models through the functions of the code before the registry (to measure it)."""
-    import torch
-
-    if kind == "gnn":
-        from training.config import TrainConfig
-        from training.data import FrameDataset
-        from training.gnn.module import GNNModule
-        from training.gnn.run import _loader
-
-        config = TrainConfig(batch_size=batch_size, seed=seed, workers=0, precision="32")
-        ds = FrameDataset(store, "train", seed=seed)
-        module = GNNModule(config.as_dict(), int(ds[0].attributes.shape[1]))
-        return module, _loader(ds, config, shuffle=True, accelerator="cpu"), 1
-    if kind == "motion":
-        from training.motion.config import MotionConfig
-        from training.motion.module import MotionModule
-        from training.motion.run import _label_names, _loader, _segments
-
-        config = MotionConfig(batch_size=batch_size, seed=seed, workers=0, precision="32")
-        module = MotionModule(config.as_dict(), len(_label_names(store)), store.body_model(), store.betas())
-        return module, _loader(_segments(store, "train"), config, shuffle=True), int(store.segment_length)
-    from training.garment.config import GarmentConfig
-    from training.garment.module import GarmentModule
-    from training.garment.run import GrowingBatchSampler, _segments, template_instance
-
-    config = GarmentConfig(garment=GARMENT, batch_size=batch_size, max_batch_size=batch_size, batch_growth=0,
-                           seed=seed, workers=0, precision="32")
-    g = template_instance(store, GARMENT)
-    ds = _segments(store, "train", g)
-    garment = store.garment(g)
-    module = GarmentModule(config.as_dict(), len(garment["rest_vertices"]), garment["faces"])
-    module.binding = store.binding(g)
-    sampler = GrowingBatchSampler(len(ds), batch_size, 0, 1, batch_size, seed)
-    return module, torch.utils.data.DataLoader(ds, batch_sampler=sampler), int(store.segment_length)
-
-
 def measure(kind: str, store, *, steps: int, warmup: int, batch_size: int, seed: int, threads: int) -> dict:
     """Samples and seconds of ``steps`` optimiser steps after ``warmup`` of them."""
     import pytorch_lightning as pl
+
+    from training.loop import batch_samples
 
     pl.seed_everything(seed, workers=True, verbose=False)
     module, loader, frames = _build(kind, store, batch_size, seed, threads)
@@ -101,7 +65,7 @@ def measure(kind: str, store, *, steps: int, warmup: int, batch_size: int, seed:
 
         def on_train_batch_end(self, trainer, pl_module, outputs, batch, batch_idx):
             if trainer.global_step > warmup:
-                self.samples += _samples(batch)
+                self.samples += batch_samples(batch)
                 self.t1 = time.perf_counter()
 
     clock = Clock()
@@ -125,11 +89,6 @@ def _optimizer(configured):
     return configured["optimizer"] if isinstance(configured, dict) else configured
 
 
-def _samples(batch) -> int:
-    graphs = getattr(batch, "num_graphs", None)
-    return int(graphs) if graphs else int(batch["label"].shape[0])
-
-
 def main(argv=None) -> None:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--data", required=True, help="a dataset store (fit attributes, labelled motions)")
@@ -143,6 +102,7 @@ def main(argv=None) -> None:
     args = p.parse_args(argv)
     import logging
 
+    import pytorch_lightning  # noqa: F401  (its import sets its logger to INFO: quieted after it)
     import torch
 
     from datagen.store import open_store
@@ -161,6 +121,3 @@ def main(argv=None) -> None:
         print(f"{r['kind']:<9}{r['parameters']:>12,}{r['samples_per_s']:>11.2f}{r['frames_per_s']:>10.2f}"
               f"{r['seconds'] / r['steps']:>8.3f}")
 
-
-if __name__ == "__main__":
-    main()
