@@ -8,8 +8,7 @@ Prints segments/s of each, so that the training's own rate (``train_summary.json
 apart: loader-bound, step-bound or neither (Lightning's own overhead). The optimiser step is timed
 per mode: ``eager`` (every operation launched from Python, as the training runs today),
 ``compile`` (the loss through ``torch.compile(mode="reduce-overhead")``, fused Adam) and ``graph``
-(the forward and backward pass replayed as the module's CUDA graphs, ``MotionConfig.cuda_graph``:
-``torch.cuda.make_graphed_callables``, the backward replayed by ``loss.backward()``; then clipping and
+(the forward and backward pass replayed as the module's CUDA graph, ``MotionConfig.cuda_graph``; then clipping and
 Adam eagerly, as training runs it; CUDA only)."""
 from __future__ import annotations
 
@@ -79,13 +78,12 @@ def main(argv=None) -> None:
                 continue
             opt = torch.optim.Adam(module.parameters(), lr=1e-4)
 
-            def run(batch):  # as training runs it: the graphed forward and backward, then clipping and Adam eagerly
-                opt.zero_grad(set_to_none=True)
+            def run(batch):  # as training runs it: the module's graph (forward and backward), then clipping and Adam eagerly
                 with torch.autocast(**amp):
                     loss = module._graph_losses(batch)["loss"]
-                loss.backward()  # replays the captured backward graph (make_graphed_callables)
                 torch.nn.utils.clip_grad_norm_(module.parameters(), 1.0)
                 opt.step()
+                opt.zero_grad(set_to_none=False)
                 return loss
 
             t = time.perf_counter()
