@@ -174,3 +174,19 @@ def load_runs(path: str | Path) -> dict:
 def run_output(out_dir: str | Path, name: str) -> Path:
     """Where ``sim run-scenes --out-dir`` saves the run ``name``'s metrics and every 10th recorded frame."""
     return Path(out_dir) / f"{name.replace('/', '_')}.npz"
+
+
+PRESET_BODIES = ("thin", "regular", "fat")
+
+
+def preset_bodies(model) -> dict[str, tuple]:
+    """The default body's presets at rest: {name: (shaped vertices [V, 3] (m), faces [F, 3],
+    BodyMeasurements, betas [S])}, for the pattern cases."""
+    from datagen.body.measurements import measure_body
+    from datagen.body.shapes import resolve_betas
+
+    bodies = {}
+    for name in PRESET_BODIES:
+        betas = resolve_betas(model, body=name)[0]
+        bodies[name] = (np.asarray(model.shaped(betas))[0], np.asarray(model.faces), measure_body(model, betas), betas)
+    return bodies

@@ -14,8 +14,9 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.common import PRESET_BODIES as BODIES
+from benchmarks.common import preset_bodies
 
-BODIES = ("thin", "regular", "fat")
 PER_SHEET = 6
 
 
@@ -33,9 +34,7 @@ def main(argv=None) -> int:
     import matplotlib.pyplot as plt
 
     from datagen.body.cache import default_body
-    from datagen.body.measurements import measure_body
     from datagen.body.render import MeshLayer, draw_meshes, view_limits
-    from datagen.body.shapes import resolve_betas
     from datagen.garment.pattern.garment import pattern_garment
     from datagen.garment.pattern.programs import PROGRAMS, make_pattern
     from datagen.garment.pattern.svg import draw_pattern_axes
@@ -44,10 +43,7 @@ def main(argv=None) -> int:
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     model = default_body()
-    bodies = {}
-    for b in BODIES:
-        betas = resolve_betas(model, body=b)[0]
-        bodies[b] = (np.asarray(model.shaped(betas))[0], np.asarray(model.faces), measure_body(model, betas), betas)
+    bodies = preset_bodies(model)
     rng = np.random.default_rng(args.seed)
     names = list(PROGRAMS)
     # every program on every body in turn (the body shifts by one each round of the programs)

@@ -22,8 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks.common import PRESET_BODIES as BODIES
+from benchmarks.common import preset_bodies
 
-BODIES = ("thin", "regular", "fat")
 
 
 def main(argv=None) -> int:
@@ -35,8 +36,6 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
 
     from datagen.body.cache import default_body
-    from datagen.body.measurements import measure_body
-    from datagen.body.shapes import resolve_betas
     from datagen.errors import DrapeError
     from datagen.garment.pattern.garment import check_pattern_garment, pattern_garment
     from datagen.garment.pattern.mesh import mesh_pattern
@@ -44,10 +43,7 @@ def main(argv=None) -> int:
     from datagen.garment.pattern.programs import PROGRAMS, make_pattern
 
     model = default_body()
-    bodies = {}
-    for b in BODIES:
-        betas = resolve_betas(model, body=b)[0]
-        bodies[b] = (np.asarray(model.shaped(betas))[0], np.asarray(model.faces), measure_body(model, betas), betas)
+    bodies = preset_bodies(model)
     rng = np.random.default_rng(args.seed)
     names = list(PROGRAMS)
     draws = [(names[i % len(names)], int(rng.integers(0, 2**31 - 1))) for i in range(args.designs)]

@@ -74,37 +74,28 @@ def mirror(segs: Sequence[Seg], end: P) -> tuple[list[Seg], P]:
     return out, _mx(pts[0])
 
 
-def shift(segs: Sequence[Seg], dx: float = 0.0, dy: float = 0.0) -> list[Seg]:
-    """``segs`` translated by (dx, dy) [m] in panel space."""
-    def mv(p):
-        return (p[0] + dx, p[1] + dy)
-
+def _map_points(segs: Sequence[Seg], f) -> list[Seg]:
+    """``segs`` with every point (starts and Bézier controls) mapped by ``f`` [m] -> [m]."""
     out = []
     for s in segs:
         c = s.curve
         if isinstance(c, Quadratic):
-            c = Quadratic(control=mv(c.control))
+            c = Quadratic(control=f(c.control))
         elif isinstance(c, Cubic):
-            c = Cubic(control1=mv(c.control1), control2=mv(c.control2))
-        out.append(Seg(mv(s.start), c, s.name, s.group))
+            c = Cubic(control1=f(c.control1), control2=f(c.control2))
+        out.append(Seg(f(s.start), c, s.name, s.group))
     return out
+
+
+def shift(segs: Sequence[Seg], dx: float = 0.0, dy: float = 0.0) -> list[Seg]:
+    """``segs`` translated by (dx, dy) [m] in panel space."""
+    return _map_points(segs, lambda p: (p[0] + dx, p[1] + dy))
 
 
 def turn(segs: Sequence[Seg]) -> list[Seg]:
     """``segs`` turned a quarter counter-clockwise in panel space ((x, y) -> (-y, x)); a panel so
     turned is placed as before with ``Rz(-90 degrees)`` applied first."""
-    def q(p):
-        return (-float(p[1]), float(p[0]))
-
-    out = []
-    for s in segs:
-        c = s.curve
-        if isinstance(c, Quadratic):
-            c = Quadratic(control=q(c.control))
-        elif isinstance(c, Cubic):
-            c = Cubic(control1=q(c.control1), control2=q(c.control2))
-        out.append(Seg(q(s.start), c, s.name, s.group))
-    return out
+    return _map_points(segs, lambda p: (-float(p[1]), float(p[0])))
 
 
 def curve_length(start: P, end: P, curve=None) -> float:
