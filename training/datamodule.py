@@ -19,6 +19,30 @@ from datagen.store import DatasetStore
 from training.config import BaseConfig
 
 
+class EpochSampler(torch.utils.data.Sampler):
+    """``num_samples`` items (default all) of a dataset of ``n``, drawn without replacement in an order
+    that is a function of (seed, epoch) alone; Lightning calls :meth:`set_epoch` before every epoch
+    (under DDP through its sampler wrapper, which then shares the order out between processes).
+
+    Not a generator that goes on from epoch to epoch (a DataLoader's ``shuffle=True``): a run resumed
+    at epoch k must draw epoch k's order, not epoch 0's, to be the run it resumes."""
+
+    def __init__(self, n: int, seed: int, num_samples: int | None = None):
+        self.n, self.seed = int(n), int(seed)
+        self.num_samples = self.n if num_samples is None else min(int(num_samples), self.n)
+        self.epoch = 0
+
+    def set_epoch(self, epoch: int) -> None:
+        self.epoch = int(epoch)
+
+    def __iter__(self):
+        g = torch.Generator().manual_seed(self.seed * 100003 + self.epoch)
+        return iter(torch.randperm(self.n, generator=g)[:self.num_samples].tolist())
+
+    def __len__(self) -> int:
+        return self.num_samples
+
+
 class StoreDataModule(pl.LightningDataModule):
     """Datasets of one store for one config (see the module docstring)."""
 
@@ -62,7 +86,8 @@ class StoreDataModule(pl.LightningDataModule):
     def loader(self, ds, *, shuffle: bool = False, batch_size: int | None = None, sampler=None,
                batch_sampler=None, graphs: bool = False, workers: int | None = None, global_batch: bool = True):
         """A DataLoader of ``ds``: ``batch_size`` (default: the config's, global) per process, shuffled
-        by a generator seeded from the config's seed, the config's workers (spawned: each opens the
+        in an order that is a function of the config's seed and the epoch (:class:`EpochSampler`,
+        unless a ``sampler`` or ``batch_sampler`` is given), the config's workers (spawned: each opens the
         store itself, as tensorstore's threads do not survive a fork), pinned memory on a GPU;
         ``graphs``: torch_geometric's loader (batches graphs of different sizes); ``global_batch``
         False: ``batch_size`` is each process's."""
@@ -74,9 +99,10 @@ class StoreDataModule(pl.LightningDataModule):
         g = torch.Generator()
         g.manual_seed(self.config.seed)
         batch_size = self.config.batch_size if batch_size is None else batch_size
+        if shuffle and sampler is None and batch_sampler is None:
+            sampler = EpochSampler(len(ds), self.config.seed)
         size = {} if batch_sampler is not None else {
-            "batch_size": self.per_process(batch_size) if global_batch else batch_size,
-            "shuffle": shuffle if sampler is None else False, "sampler": sampler}
+            "batch_size": self.per_process(batch_size) if global_batch else batch_size, "sampler": sampler}
         return DataLoader(ds, **size, batch_sampler=batch_sampler, num_workers=workers, pin_memory=self.on_gpu,
                           persistent_workers=workers > 0, generator=g,
                           multiprocessing_context="spawn" if workers > 0 else None)

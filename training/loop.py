@@ -108,6 +108,7 @@ def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, A
                              f"(stored {', '.join(f'{k}={stored.get(k)!r:.80}' for k in different)}); resume with "
                              f"the same command (only {' and '.join(RESUME_MAY_CHANGE)} may change), or give a new "
                              "--out")
+        _check_resumable(out)
         if stored != meta:
             (out / RUN_FILE).write_text(json.dumps(meta, indent=2))
         return out
@@ -177,6 +178,31 @@ def _latest_checkpoint(dirpath: Path, seconds: float):
     return Latest()
 
 
+def _epoch_seed(seed: int):
+    """A callback that seeds torch, numpy and Python at every training epoch's start from (seed,
+    epoch): dropout, sampled latents and whatever else draws from the global generators in epoch k
+    then draw the same numbers whether the run got there uninterrupted or resumed from epoch k's
+    checkpoint (the samplers are seeded per epoch too: :class:`training.datamodule.EpochSampler`)."""
+    import pytorch_lightning as pl
+
+    class EpochSeed(pl.Callback):
+        def on_train_epoch_start(self, trainer, pl_module):
+            pl.seed_everything(seed * 100003 + trainer.current_epoch + trainer.global_rank * 7919, workers=True,
+                               verbose=False)
+
+    return EpochSeed()
+
+
+def _check_resumable(out: Path) -> Path:
+    """The resume checkpoint of run directory ``out``, or an InputError saying why there is none."""
+    last = out / "checkpoints" / "last.ckpt"
+    if not last.is_file():
+        raise InputError(f"--resume: {out} has no checkpoints/last.ckpt (the run stopped before its first epoch "
+                         f"ended, or the file was removed): there is nothing to resume; start the run again with "
+                         f"--force")
+    return last
+
+
 def fit(module, data, config: BaseConfig, out: Path, *, device: str = "auto", resume: bool = False,
         monitor: str = "val/detail_mm", distributed_sampler: bool = True) -> dict[str, Any]:
     """Train ``module`` on ``data`` (a ``LightningDataModule``) with Lightning; returns the best
@@ -202,11 +228,12 @@ def fit(module, data, config: BaseConfig, out: Path, *, device: str = "auto", re
     # at an epoch's end, whatever the score, at most once a minute and at the end (Lightning's
     # save_last writes only when a best one is written)
     latest = _latest_checkpoint(out / "checkpoints", LAST_CHECKPOINT_SECONDS)
+    resume_from = str(_check_resumable(out)) if resume else None
     attempt = len(list((out / "logs" / "csv").glob("attempt-*")))
     trainer = pl.Trainer(
         max_epochs=config.epochs, accelerator=accelerator, devices=local, num_nodes=max(1, world // local),
         strategy="ddp" if world > 1 else "auto", precision=precision,
-        callbacks=[best, latest, EarlyStopping(monitor=monitor, mode="min", patience=config.early_stop_patience),
+        callbacks=[_epoch_seed(config.seed), best, latest, EarlyStopping(monitor=monitor, mode="min", patience=config.early_stop_patience),
                    LearningRateMonitor(logging_interval="epoch"),
                    ThroughputMonitor(batch_size_fn=batch_samples, window_size=THROUGHPUT_WINDOW)],
         logger=[TensorBoardLogger(out / "logs", name="tensorboard", version=""),
@@ -218,9 +245,14 @@ def fit(module, data, config: BaseConfig, out: Path, *, device: str = "auto", re
 
     with warnings.catch_warnings():  # ThroughputMonitor asks for FLOPs, which drape does not count
         warnings.filterwarnings("ignore", message=".*flops_per_batch.*")
-        trainer.fit(module, datamodule=data,
-                    ckpt_path=str(out / "checkpoints" / "last.ckpt")
-                    if resume and (out / "checkpoints" / "last.ckpt").is_file() else None)
+        try:
+            trainer.fit(module, datamodule=data, ckpt_path=resume_from)
+        except SystemExit:
+            # Lightning answers Ctrl-C by a graceful shutdown that ends in sys.exit(1): let the CLI say
+            # how to resume, as it does for every other interrupted command
+            if trainer.interrupted:
+                raise KeyboardInterrupt from None
+            raise
     score = best.best_model_score
     rates = read_metrics(out, THROUGHPUT_KEY, attempts=[attempt]) if trainer.is_global_zero else {}
     result = {"best": None if score is None else float(score), "best_checkpoint": best.best_model_path,

@@ -17,29 +17,9 @@ from training.garment.config import GarmentConfig
 
 pytestmark = pytest.mark.slow
 
-MOTION_LIKE = {
-    "seed": 0, "frames": 6, "segment_length": 3, "garment_edge_length": 0.07, "fit_attribute": False,
-    "split_disjoint": ["motions"],
-    "simulation": {"settle_rest": 2, "lead_in": 0.1, "settle_pose": 1, "ramp": 0.1,
-                   "solver": {"substeps": 3, "iterations": 3, "detection_interval": 2}},
-    "train": {"garments": ["skirt:0"], "bodies": ["regular"], "motions": ["walk:0", "squat:0"]},
-    "val": {"garments": ["skirt:0"], "bodies": ["regular"], "motions": ["walk:1"]},
-    "test": {"garments": ["skirt:0"], "bodies": ["regular"], "motions": ["walk:2"]},
-}
 SMALL = {"epochs": 6, "batch_size": 2, "batch_growth": 1, "growth_every": 2, "max_batch_size": 4, "lr": 1e-3,
          "d_model": 32, "heads": 2, "feedforward": 64, "bos_hidden": [32, 64], "bos_epochs": 30, "precision": "32",
          "workers": 0}
-
-
-@pytest.fixture(scope="module")
-def motion_store(tmp_path_factory):
-    from datagen.config import load_config
-    from datagen.generate.config import DatasetConfig
-    from datagen.generate.run import generate
-
-    out = tmp_path_factory.mktemp("motion-store") / "m.zarr"
-    generate(load_config(DatasetConfig, MOTION_LIKE), out)
-    return out
 
 
 @pytest.fixture(scope="module")

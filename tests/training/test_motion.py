@@ -204,9 +204,11 @@ def test_bad_input_gets_one_clear_line(motion_run, tmp_path):
     assert unseen and "walk" not in unseen
     with pytest.raises(InputError, match=f"label '{unseen[0]}' had no training segments in this run.*it learned: .*walk"):
         sample_motions(run, unseen[0], 2, 0, tmp_path / "a")
-    with pytest.raises(InputError, match="not one this model was trained on: walk"):
+    with pytest.raises(InputError, match="'moonwalk' is not a motion label of this run's store; the model learned: "
+                       ".*walk") as e:
         sample_motions(run, "moonwalk", 2, 0, tmp_path / "a")
-    with pytest.raises(InputError, match="'moonwalk' is not one this model was trained on"):  # checked before writing walk
+    assert unseen[0] not in str(e.value).split("learned:")[1]  # only the labels it learned, not all 17
+    with pytest.raises(InputError, match="'moonwalk' is not a motion label"):  # checked before writing walk
         sample_motions(run, "walk,moonwalk", 2, 0, tmp_path / "a")
     with pytest.raises(InputError, match="names no label"):
         sample_motions(run, ",", 2, 0, tmp_path / "a")

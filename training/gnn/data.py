@@ -25,7 +25,7 @@ import torch
 from datagen.errors import InputError
 from datagen.geometry.topology import unique_edges
 from datagen.store import DatasetStore, open_store
-from training.datamodule import StoreDataModule
+from training.datamodule import EpochSampler, StoreDataModule
 from training.gnn.config import GNNConfig
 from training.gnn.features import body_node_features, node_features
 
@@ -129,9 +129,8 @@ class GNNDataModule(StoreDataModule):
         c, ds = self.config, self.train_set
         sampler = None
         if c.epoch_frames is not None and c.epoch_frames < len(ds):
-            # a fresh draw of epoch_frames frames each epoch (the generator goes on from epoch to epoch)
-            sampler = torch.utils.data.RandomSampler(ds, num_samples=c.epoch_frames,
-                                                     generator=torch.Generator().manual_seed(c.seed))
+            # a fresh draw of epoch_frames frames each epoch, a function of (seed, epoch)
+            sampler = EpochSampler(len(ds), c.seed, num_samples=c.epoch_frames)
         return self.loader(ds, shuffle=True, sampler=sampler, graphs=True)
 
     def val_dataloader(self):

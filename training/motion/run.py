@@ -365,11 +365,12 @@ def check_label(loaded, label: str) -> None:
     """Refuse, in one line, a label the loaded run was not trained on or saw no training segment of."""
     _, meta, _, store = loaded
     labels = meta["labels"]
-    if label not in labels:
-        raise InputError(f"label {label!r} is not one this model was trained on: {', '.join(labels)}")
     counts = train_label_counts(store, len(labels))
+    seen = [name for name, c in zip(labels, counts) if c > 0]
+    if label not in labels:
+        # the run's label set is the store's (all of them); only those with training segments were learned
+        raise InputError(f"{label!r} is not a motion label of this run's store; the model learned: {', '.join(seen)}")
     if counts[labels.index(label)] == 0:
-        seen = [name for name, c in zip(labels, counts) if c > 0]
         raise InputError(f"label {label!r} had no training segments in this run (no motion of the store's train "
                          f"split has it), so the generator cannot make it; it learned: {', '.join(seen)}")
 
