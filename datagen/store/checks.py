@@ -19,7 +19,8 @@ from datagen.store.layout import specs_of_group
 from datagen.store.validation import Dimensions, value_problems
 from schemas.dataset import ARRAYS, NAME_LISTS, SPLIT_NAMES, STATIC_GROUPS, ArraySpec
 
-__all__ = ["RANGED", "SAMPLE_ARRAYS", "SAMPLE_SCALARS", "check_sample", "check_static", "raise_problems"]
+__all__ = ["RANGED", "SAMPLE_ARRAYS", "SAMPLE_SCALARS", "check_sample", "check_static", "design_record",
+           "pattern_problems", "raise_problems"]
 
 SAMPLE_ARRAYS: dict[str, ArraySpec] = {a.name: a for a in ARRAYS.values()
                                        if a.written_by == "stage_sample" and a.sample_shape != ()}
@@ -214,10 +215,16 @@ def check_static(group: str, arrays: Mapping[str, Any], names: Mapping[str, Any]
         upper = len(out_names[spec.codes]) if spec.codes in out_names else dims.sizes.get(spec.index_of or "")
         if spec.finite == "fitted" and np.isnan(arr).all():  # no fit attribute in this store
             continue
+        if spec.finite == "pattern" and "face_panel" in out:  # NaN on shell garments' rows, finite on patterns'
+            pattern = out["face_panel"] >= 0
+            if not np.isnan(arr[~pattern]).all():
+                problems.append(f"{where}: '{name}' must be NaN on the rows of shell garments (face_panel -1)")
+            arr = arr[pattern]
         if spec.unit != "row":
             problems += [f"{where}: {p}" for p in value_problems(spec, arr, name=name, upper=upper)]
     if group == "garments":
-        for key, rows in (("vertex_start", "n_garment_vertices"), ("face_start", "n_garment_faces")):
+        for key, rows in (("vertex_start", "n_garment_vertices"), ("face_start", "n_garment_faces"),
+                          ("stitch_start", "n_stitches"), ("design_start", "n_design_bytes")):
             off = out[key]
             if off[0] != 0 or np.any(np.diff(off) < 0) or off[-1] != dims.sizes[rows]:
                 problems.append(f"{where}: '{key}' must start at 0, never decrease and end at {dims.sizes[rows]} "
@@ -229,7 +236,53 @@ def check_static(group: str, arrays: Mapping[str, Any], names: Mapping[str, Any]
                 g = int(np.searchsorted(out["face_start"], bad[0], side="right") - 1)
                 problems.append(f"{where}: 'faces' row {bad[0]} (instance {g}) has {out['faces'][bad[0]].tolist()}; "
                                 f"indices must be local to the instance (0 .. {Vg[bad[0]] - 1})")
+            problems += pattern_problems(out, where)
     if group == "body" and out["parents"][0] != -1:
         problems.append(f"{where}: 'parents'[0] must be -1 (the root)")
     raise_problems(problems, "Fix the static arrays and stage them again.")
     return out, out_names, {k: v for k, v in dims.sizes.items()}
+
+
+def design_record(design: np.ndarray, design_start: np.ndarray, g: int) -> dict | None:
+    """The design record of garment instance ``g`` (the JSON of ``garments/design``), or None for a
+    shell garment (no bytes). Raises ValueError when the bytes are not UTF-8 JSON of an object."""
+    import json
+
+    raw = bytes(np.asarray(design[int(design_start[g]):int(design_start[g + 1])], dtype=np.uint8))
+    if not raw:
+        return None
+    record = json.loads(raw.decode("utf-8"))
+    if not isinstance(record, dict):
+        raise ValueError("a design record is a JSON object")
+    return record
+
+
+def pattern_problems(a: Mapping[str, np.ndarray], where: str) -> list[str]:
+    """What is wrong with the pattern arrays of a garments group ``a`` (every array, offsets checked):
+    a garment is a pattern garment (panels >= 0, a design record, finite corner coordinates) or a
+    shell (-1, none, NaN) throughout; stitches local to their instance; each design record UTF-8
+    JSON of an object."""
+    out: list[str] = []
+    vs, fs, ss, ds = (np.asarray(a[k]) for k in ("vertex_start", "face_start", "stitch_start", "design_start"))
+    for g in range(len(vs) - 1):
+        panel, face_panel = a["panel"][vs[g]:vs[g + 1]], a["face_panel"][fs[g]:fs[g + 1]]
+        try:
+            record = design_record(a["design"], ds, g)
+        except ValueError as exc:
+            out.append(f"{where}: 'design' of instance {g} is not UTF-8 JSON of an object ({exc})")
+            continue
+        kinds = {"panel": bool(len(panel)) and bool((panel >= 0).all()),
+                 "face_panel": bool(len(face_panel)) and bool((face_panel >= 0).all()), "design": record is not None}
+        shell = {"panel": bool((panel == -1).all()), "face_panel": bool((face_panel == -1).all()),
+                 "design": record is None}
+        if not (all(kinds.values()) or all(shell.values()) and ss[g + 1] == ss[g]):
+            out.append(f"{where}: instance {g} is neither a pattern garment (panel and face_panel >= 0, a design "
+                       "record) nor a shell garment (panel and face_panel -1, no stitches, no design record)")
+        st = a["stitches"][ss[g]:ss[g + 1]]
+        V = int(vs[g + 1] - vs[g])
+        if st.size and (st.min() < 0 or st.max() >= V):
+            out.append(f"{where}: 'stitches' of instance {g} has vertex {int(st.min() if st.min() < 0 else st.max())}"
+                       f"; indices must be local to the instance (0 .. {V - 1})")
+        if len(out) > 10:
+            break
+    return out

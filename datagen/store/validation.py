@@ -263,6 +263,7 @@ def validate(path: str | Path, *, check_values: bool = True, quick: bool = False
     checker.values(check_values)
     checker.subdivision()
     checker.samples()
+    checker.patterns()
     if check_values:
         checker.motions()
     checker.segments()
@@ -384,6 +385,8 @@ class _Checker:
         self.vrow_start = self._offsets("index/vertex_row_start", n.get("n_vertex_rows"), "vertex_frame")
         self.gv_start = self._offsets("garments/vertex_start", n.get("n_garment_vertices"), "garment_vertex")
         self.gf_start = self._offsets("garments/face_start", n.get("n_garment_faces"), "garment_face")
+        self.gs_start = self._offsets("garments/stitch_start", n.get("n_stitches"), "garment_stitch")
+        self.gd_start = self._offsets("garments/design_start", n.get("n_design_bytes"), "garment_design")
 
     def upper(self, spec: ArraySpec) -> int | None:
         if spec.codes:
@@ -420,6 +423,15 @@ class _Checker:
                     self.say(f"'{path}' must be NaN everywhere: the store has no fit attribute "
                              "(root attribute fit_attribute is false)")
                 return
+            if is_float and spec.finite == "pattern":
+                face_panel = self.get("garments/face_panel")
+                if face_panel is None or len(face_panel) != arr.shape[0]:
+                    return  # reported by the shape checks
+                shell = face_panel[start:start + len(block)] < 0
+                if not np.isnan(block[shell]).all():
+                    self.say(f"'{path}' must be NaN on the rows of shell garments (garments/face_panel -1)")
+                    return
+                block = np.where(shell.reshape(-1, *([1] * (block.ndim - 1))), 0, block)
             if is_float and spec.finite == "ok_samples" and failed_rows is not None:
                 skip = failed_rows[start:start + len(block)]
                 if skip.any():  # a failed sample's metrics may be inf/nan
@@ -523,6 +535,21 @@ class _Checker:
                 g = int(np.searchsorted(self.gf_start, r, side="right") - 1)
                 self.say(f"'garments/faces' row {r} (garment instance {g}, face {r - self.gf_start[g]}) has "
                          f"{faces[r].tolist()}: indices must be local to the instance (0 .. {Vg[r] - 1})")
+
+    def patterns(self) -> None:
+        """Every garment instance a pattern garment or a shell throughout; stitches local; design records
+        UTF-8 JSON (:func:`datagen.store.checks.pattern_problems`)."""
+        from datagen.store.checks import pattern_problems
+
+        names = ("vertex_start", "face_start", "stitch_start", "design_start", "panel", "face_panel", "stitches",
+                 "design")
+        if any(x is None for x in (self.gv_start, self.gf_start, self.gs_start, self.gd_start)):
+            return
+        a = {k: self.get(f"garments/{k}") for k in names}
+        if any(v is None for v in a.values()) or len(a["panel"]) != self.gv_start[-1] \
+                or len(a["face_panel"]) != self.gf_start[-1]:
+            return
+        self.problems.extend(pattern_problems(a, "garments"))
 
     def motions(self) -> None:
         """Every passed sample's recorded poses and translations are its motion's (the first ``T`` of
