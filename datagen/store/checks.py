@@ -16,11 +16,10 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.geometry.positions import encode_positions
 from datagen.store.layout import specs_of_group
-from datagen.store.validation import Dimensions, value_problems
+from datagen.store.validation import Dimensions, pattern_problems, value_problems
 from schemas.dataset import ARRAYS, NAME_LISTS, SPLIT_NAMES, STATIC_GROUPS, ArraySpec
 
-__all__ = ["RANGED", "SAMPLE_ARRAYS", "SAMPLE_SCALARS", "check_sample", "check_static", "design_record",
-           "pattern_problems", "raise_problems"]
+__all__ = ["RANGED", "SAMPLE_ARRAYS", "SAMPLE_SCALARS", "check_sample", "check_static", "raise_problems"]
 
 SAMPLE_ARRAYS: dict[str, ArraySpec] = {a.name: a for a in ARRAYS.values()
                                        if a.written_by == "stage_sample" and a.sample_shape != ()}
@@ -242,47 +241,3 @@ def check_static(group: str, arrays: Mapping[str, Any], names: Mapping[str, Any]
     raise_problems(problems, "Fix the static arrays and stage them again.")
     return out, out_names, {k: v for k, v in dims.sizes.items()}
 
-
-def design_record(design: np.ndarray, design_start: np.ndarray, g: int) -> dict | None:
-    """The design record of garment instance ``g`` (the JSON of ``garments/design``), or None for a
-    shell garment (no bytes). Raises ValueError when the bytes are not UTF-8 JSON of an object."""
-    import json
-
-    raw = bytes(np.asarray(design[int(design_start[g]):int(design_start[g + 1])], dtype=np.uint8))
-    if not raw:
-        return None
-    record = json.loads(raw.decode("utf-8"))
-    if not isinstance(record, dict):
-        raise ValueError("a design record is a JSON object")
-    return record
-
-
-def pattern_problems(a: Mapping[str, np.ndarray], where: str) -> list[str]:
-    """What is wrong with the pattern arrays of a garments group ``a`` (every array, offsets checked):
-    a garment is a pattern garment (panels >= 0, a design record, finite corner coordinates) or a
-    shell (-1, none, NaN) throughout; stitches local to their instance; each design record UTF-8
-    JSON of an object."""
-    out: list[str] = []
-    vs, fs, ss, ds = (np.asarray(a[k]) for k in ("vertex_start", "face_start", "stitch_start", "design_start"))
-    for g in range(len(vs) - 1):
-        panel, face_panel = a["panel"][vs[g]:vs[g + 1]], a["face_panel"][fs[g]:fs[g + 1]]
-        try:
-            record = design_record(a["design"], ds, g)
-        except ValueError as exc:
-            out.append(f"{where}: 'design' of instance {g} is not UTF-8 JSON of an object ({exc})")
-            continue
-        kinds = {"panel": bool(len(panel)) and bool((panel >= 0).all()),
-                 "face_panel": bool(len(face_panel)) and bool((face_panel >= 0).all()), "design": record is not None}
-        shell = {"panel": bool((panel == -1).all()), "face_panel": bool((face_panel == -1).all()),
-                 "design": record is None}
-        if not (all(kinds.values()) or all(shell.values()) and ss[g + 1] == ss[g]):
-            out.append(f"{where}: instance {g} is neither a pattern garment (panel and face_panel >= 0, a design "
-                       "record) nor a shell garment (panel and face_panel -1, no stitches, no design record)")
-        st = a["stitches"][ss[g]:ss[g + 1]]
-        V = int(vs[g + 1] - vs[g])
-        if st.size and (st.min() < 0 or st.max() >= V):
-            out.append(f"{where}: 'stitches' of instance {g} has vertex {int(st.min() if st.min() < 0 else st.max())}"
-                       f"; indices must be local to the instance (0 .. {V - 1})")
-        if len(out) > 10:
-            break
-    return out

@@ -30,7 +30,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.geometry.positions import decode_positions
 from datagen.store.integrity import ShardGuard
-from datagen.store.layout import read_root_metadata
+from datagen.store.layout import design_record, read_root_metadata
 from schemas.dataset import (
     ARRAYS,
     DATASET_SCHEMA_VERSION,
@@ -563,8 +563,6 @@ class DatasetStore:
         and its sewing pattern: ``panel`` [V], ``face_panel`` [F], ``rest_uv`` [F, 3, 2] (m, per corner),
         ``stitches`` [P, 2] and ``design`` (the design record as a dict: program, seed, source,
         parameters, pattern), or -1, NaN, no rows and None for a shell garment."""
-        from datagen.store.checks import design_record
-
         if isinstance(g, bool) or not isinstance(g, (int, np.integer)) or not 0 <= g < self.garment_count:
             raise IndexError(f"garment instance {g!r} is not in 0 .. {self.garment_count - 1}")
         idx = self.index

@@ -140,6 +140,39 @@ def value_problems(spec: ArraySpec, values: np.ndarray, *, name: str | None = No
     return out
 
 
+def pattern_problems(a: dict[str, np.ndarray], where: str) -> list[str]:
+    """What is wrong with the pattern arrays of a garments group ``a`` (every array, offsets checked):
+    a garment is a pattern garment (panels >= 0, a design record, finite corner coordinates) or a
+    shell (-1, none, NaN) throughout; stitches local to their instance; each design record UTF-8
+    JSON of an object."""
+    out: list[str] = []
+    vs, fs, ss, ds = (np.asarray(a[k]) for k in ("vertex_start", "face_start", "stitch_start", "design_start"))
+    from datagen.store.layout import design_record
+
+    for g in range(len(vs) - 1):
+        panel, face_panel = a["panel"][vs[g]:vs[g + 1]], a["face_panel"][fs[g]:fs[g + 1]]
+        try:
+            record = design_record(a["design"], ds, g)
+        except ValueError as exc:
+            out.append(f"{where}: 'design' of instance {g} is not UTF-8 JSON of an object ({exc})")
+            continue
+        kinds = {"panel": bool(len(panel)) and bool((panel >= 0).all()),
+                 "face_panel": bool(len(face_panel)) and bool((face_panel >= 0).all()), "design": record is not None}
+        shell = {"panel": bool((panel == -1).all()), "face_panel": bool((face_panel == -1).all()),
+                 "design": record is None}
+        if not (all(kinds.values()) or all(shell.values()) and ss[g + 1] == ss[g]):
+            out.append(f"{where}: instance {g} is neither a pattern garment (panel and face_panel >= 0, a design "
+                       "record) nor a shell garment (panel and face_panel -1, no stitches, no design record)")
+        st = a["stitches"][ss[g]:ss[g + 1]]
+        V = int(vs[g + 1] - vs[g])
+        if st.size and (st.min() < 0 or st.max() >= V):
+            out.append(f"{where}: 'stitches' of instance {g} has vertex {int(st.min() if st.min() < 0 else st.max())}"
+                       f"; indices must be local to the instance (0 .. {V - 1})")
+        if len(out) > 10:
+            break
+    return out
+
+
 # --------------------------------------------------------------------------------------------- validate
 
 
@@ -539,8 +572,6 @@ class _Checker:
     def patterns(self) -> None:
         """Every garment instance a pattern garment or a shell throughout; stitches local; design records
         UTF-8 JSON (:func:`datagen.store.checks.pattern_problems`)."""
-        from datagen.store.checks import pattern_problems
-
         names = ("vertex_start", "face_start", "stitch_start", "design_start", "panel", "face_panel", "stitches",
                  "design")
         if any(x is None for x in (self.gv_start, self.gf_start, self.gs_start, self.gd_start)):
