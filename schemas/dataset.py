@@ -28,9 +28,11 @@ from dataclasses import dataclass
 DATASET_SCHEMA_VERSION = 6
 """6: garments keep their sewing pattern (per-corner 2D rest coordinates, panels, stitches, the design
 as JSON) and ``garments/rest_vertices`` is the settled drape at rest (the builder's construction is
-``garments/built_vertices``). 5: every motion's recorded poses and translations (``motions/pose``, ``motions/trans``), whether
-its scenes passed or failed, so that a motion model learns every motion of the config. 4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored (they come from
-:mod:`datagen.features`), the subdivided body's topology stored, the fit attribute optional.
+``garments/built_vertices``). 5: every motion's recorded poses and translations (``motions/pose``,
+``motions/trans``), whether its scenes passed or failed, so that a motion model learns every motion
+of the config. 4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored
+(they come from :mod:`datagen.features`), the subdivided body's topology stored, the fit attribute
+optional.
 3: the code version recorded. 2: the slip metric."""
 
 REFUSED_VERSIONS: dict[int, str] = {
@@ -225,9 +227,11 @@ TABLES: dict[str, Table] = {
     "garment_face": Table(rows="n_garment_faces", offsets="garments/face_start", offsets_per="garment",
                           chunking=_ROWS, doc="one triangle of one garment instance, instances in order"),
     "garment_stitch": Table(rows="n_stitches", offsets="garments/stitch_start", offsets_per="garment",
-                            chunking=_SMALL, doc="one stitched vertex pair of one garment instance, instances in order"),
+                            chunking=_SMALL,
+                            doc="one stitched vertex pair of one garment instance, instances in order"),
     "garment_design": Table(rows="n_design_bytes", offsets="garments/design_start", offsets_per="garment",
-                            chunking=_SMALL, doc="one byte of one garment instance's design record, instances in order"),
+                            chunking=_SMALL,
+                            doc="one byte of one garment instance's design record, instances in order"),
 }
 """Row tables and their chunking (see ``docs/store.md`` for why these sizes)."""
 
@@ -358,7 +362,8 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
     _static("garments/type", ("G",), "int32", "code", "garment type: a shell type, or pattern:PROGRAM (a pattern "
             "program) or pattern:file (a specification file)", codes="garment_type_names", table="garment"),
     _static("garments/seed", ("G",), "int32", "1", "style seed of the instance (the design seed of a pattern program; "
-            "of a specification file, a digest of its bytes, so (type, seed) is the design's identity)", table="garment"),
+            "of a specification file, a digest of its bytes, so (type, seed) is the design's identity)",
+            table="garment"),
     _static("garments/body", ("G",), "int32", "index", "body the instance was made for", index_of="n_bodies",
             table="garment"),
     _static("garments/material", ("G",), "int32", "code", "material", codes="material_names", table="garment"),

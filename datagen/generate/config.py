@@ -18,7 +18,8 @@ table per split::
     [test] ...
 
 Every split's scenes are the product garments x bodies x motions. Splits share no garment
-design (type and seed: a pattern program and its seed, a specification file's bytes), body or motion unless ``split_disjoint`` says otherwise (paper 001 keeps one garment
+design (type and seed: a pattern program and its seed, a specification file's bytes), body or
+motion unless ``split_disjoint`` says otherwise (paper 001 keeps one garment
 template per type and the mean body, and splits by motion only).
 """
 
@@ -224,7 +225,7 @@ def check_dataset_config(c: DatasetConfig) -> None:
                               "or bodies to it, or set fit_attribute = false (paper 001's models do not use α)")
 
 
-PRESETS: dict[str, dict] = {
+SHELL_PRESETS: dict[str, dict] = {
     # a few minutes on 2 CPU cores: coarse garments, one 60-frame segment each, three bodies
     "tiny": {
         "seed": 0, "frames": 60, "segment_length": 60, "garment_edge_length": 0.035,
@@ -307,6 +308,59 @@ PRESETS: dict[str, dict] = {
 }
 
 
+PATTERN_GARMENTS: dict[str, dict[str, list[str]]] = {
+    # as cheap on the CPU as the shells: ~550-1,100 vertices at 3.5 cm (top 542, trousers 1,017, skirt 642, dress 1,097)
+    "tiny": {"train": ["pattern:top:0", "pattern:trousers:0"], "val": ["pattern:skirt_a_line:1"],
+             "test": ["pattern:dress:2"]},
+    "small": {"train": ["pattern:top:0", "pattern:dress:0", "pattern:skirt_a_line:0", "pattern:skirt_circle:0",
+                        "pattern:trousers:0", "pattern:shorts:0"],
+              "val": ["pattern:top:7", "pattern:skirt_gored:7"], "test": ["pattern:dress:9", "pattern:trousers:9"]},
+    "medium": {"train": ["pattern:top:0", "pattern:top:1", "pattern:jacket:0", "pattern:dress:0",
+                         "pattern:skirt_straight:0", "pattern:trousers:0", "pattern:shorts:0"],
+               "val": ["pattern:top:7", "pattern:skirt_a_line:7", "pattern:trousers:7"],
+               "test": ["pattern:top:0", "pattern:trousers:0", "pattern:top:9", "pattern:trousers:9"]},
+    # 17 designs of all nine programs for training, 7 unseen ones for testing (paper 000 §5.1's counts)
+    "paper-gnn": {"train": [f"pattern:{p}:{s}" for p, s in (
+                      ("top", 0), ("top", 1), ("top", 2), ("top", 3), ("jacket", 0), ("jacket", 1), ("dress", 0),
+                      ("dress", 1), ("dress", 2), ("skirt_straight", 0), ("skirt_a_line", 0), ("skirt_circle", 0),
+                      ("skirt_gored", 0), ("trousers", 0), ("trousers", 1), ("shorts", 0), ("shorts", 1))],
+                  "val": ["pattern:top:7", "pattern:dress:7", "pattern:trousers:7"],
+                  "test": [f"pattern:{p}:9" for p in ("top", "jacket", "dress", "skirt_a_line", "skirt_circle",
+                                                      "trousers", "shorts")]},
+    # paper 001: one template per kind (a skirt, a top, trousers) in every split
+    "paper-motion": {k: ["pattern:skirt_a_line:0", "pattern:top:0", "pattern:trousers:0"]
+                     for k in ("train", "val", "test")},
+}
+"""The garments of each preset in its pattern form (sewing-pattern programs, ``pattern:PROGRAM:SEED``);
+everything else is the shell preset's."""
+
+PATTERN_PRESETS: dict[str, dict] = {
+    name: {**preset, **{split: {**preset[split], "garments": PATTERN_GARMENTS[name][split]}
+                        for split in ("train", "val", "test")}}
+    for name, preset in SHELL_PRESETS.items()}
+"""The presets with sewn pattern garments (``--preset NAME-pattern`` while the default is shells)."""
+
+PRESET_VARIANTS: dict[str, dict[str, dict]] = {"shell": SHELL_PRESETS, "pattern": PATTERN_PRESETS}
+
+PRESET_GARMENTS = "shell"
+"""The garment family of the presets by their plain names (``tiny``, ``small``, ...); the other family
+is ``NAME-shell`` / ``NAME-pattern``."""
+
+PRESETS: dict[str, dict] = PRESET_VARIANTS[PRESET_GARMENTS]
+"""The presets by name (their garments: :data:`PRESET_GARMENTS`)."""
+
+
+def preset_config(name: str) -> dict:
+    """The preset ``name`` (``tiny``, ...), or ``NAME-shell`` / ``NAME-pattern`` for a garment family."""
+    base, _, family = name.rpartition("-")
+    if family in PRESET_VARIANTS and base in PRESET_VARIANTS[family]:
+        return PRESET_VARIANTS[family][base]
+    if name not in PRESETS:
+        raise ConfigError(f"unknown preset {name!r}; presets: {', '.join(PRESETS)} (garments: {PRESET_GARMENTS}s; "
+                          f"add -shell or -pattern for a family, e.g. tiny-pattern)")
+    return PRESETS[name]
+
+
 def with_batch_size(config: DatasetConfig, batch_size: int) -> DatasetConfig:
     """``config`` with ``simulation.batch_size`` replaced (an execution setting, outside the store's
     identity), checked against the field's limits like a config file's value."""
@@ -322,7 +376,4 @@ def resolve_config(path: str | Path | None = None, preset: str | None = None) ->
         raise ConfigError("give a config file or --preset, not both")
     if path is not None:
         return load_config(DatasetConfig, path)
-    name = preset or "tiny"
-    if name not in PRESETS:
-        raise ConfigError(f"unknown preset {name!r}; presets: {', '.join(PRESETS)}")
-    return load_config(DatasetConfig, PRESETS[name])
+    return load_config(DatasetConfig, preset_config(preset or "tiny"))
