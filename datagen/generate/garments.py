@@ -172,14 +172,15 @@ def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | N
 
 def design_record(entry: GarmentEntry, garment) -> dict | None:
     """The design record a store keeps of a pattern garment (``garments/design``): the program (or
-    ``file``), seed, source, numeric design parameters and the GarmentCode specification; None for
-    a shell."""
+    ``file``), seed, source, design parameters (the program's, choices by name included) and the
+    GarmentCode specification; None for a shell."""
     if not entry.is_pattern:
         return None
+    spec = json.loads(garment.pattern) if garment.pattern else None
+    design = (spec or {}).get("design") or dict(garment.metadata.params or {})  # the program's own, words too
     return {"program": entry.name if entry.kind == "program" else "file", "seed": entry.seed,
-            "source": "program" if entry.kind == "program" else str(entry.path),
-            "parameters": dict(garment.metadata.params or {}),
-            "pattern": json.loads(garment.pattern) if garment.pattern else None}
+            "source": "program" if entry.kind == "program" else str(entry.path), "parameters": design,
+            "pattern": spec}
 
 
 def corner_rest_uv(garment) -> np.ndarray:
