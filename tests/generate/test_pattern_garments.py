@@ -169,3 +169,31 @@ def test_a_micro_store_keeps_the_pattern_and_the_settled_templates(tmp_path, cap
     np.testing.assert_allclose(np.asarray(st.Get()), s.garment(pattern_garment)["rest_uv"].reshape(-1, 2))
     panel = UsdGeom.PrimvarsAPI(garment).GetPrimvar("drape:panel")
     assert np.array_equal(np.asarray(panel.Get()), s.garment(pattern_garment)["face_panel"])
+
+
+def test_settled_is_the_rest_settle_in_the_garments_own_frame():
+    """``SceneResult.settled`` is the garment at the end of the settle in the rest pose with the
+    motion's translation taken off: a scene recorded from that very frame (no lead-in, pose settle or
+    ramp) records it shifted by the translation; the template settle is that scene's settle at the
+    origin, bit for bit (the simulator is deterministic and batch-independent)."""
+    from datagen.generate.plan import Plan
+    from datagen.generate.templates import rest_motion, settle_config, settle_templates
+    from datagen.motion.motion import Motion
+    from datagen.sim.scene import Scene, settled_frame, simulate
+
+    cfg = load_config(DatasetConfig, {**MICRO, "train": {**MICRO["train"], "garments": ["skirt:0"]}})
+    plan = Plan(cfg)
+    run = settle_config(cfg.simulation)
+    shift = np.array([5.0, 0.0, -3.0])
+    moved = Motion(poses=np.zeros((1, 24, 3)), trans=shift[None], fps=30.0, label=-1, label_name="rest")
+    garment, betas = plan.garment(0), plan.betas[0]
+    results = simulate([Scene(garment=garment, body=plan.body_model, betas=betas, motion=m)
+                        for m in (moved, rest_motion(30.0))], run)
+    for r in results:
+        assert r.recorded_from == settled_frame(run) and r.settled.shape == garment.vertices.shape
+    offset = results[0].positions[0] - results[0].settled  # the motion's translation, for every vertex
+    np.testing.assert_allclose(offset, np.broadcast_to(shift, offset.shape), atol=1e-5)
+    assert np.abs(results[1].settled - garment.vertices).max() > 1e-3  # it moved: a settle, not the construction
+    templates, settled, figures = settle_templates(plan, [garment], None)
+    assert settled.tolist() == [1] and not figures["failed"]
+    assert np.array_equal(templates[0], results[1].settled.astype(np.float64))
