@@ -409,6 +409,16 @@ def test_info_summarises_splits_sizes_failures(packed, tmp_path):
     assert info["sizes"]["vertex_frames"]["on_disk"] > 0
     text = format_store_info(info)
     assert "train" in text and "nan" in text and "vertex_frames" in text
+    # the garments: types (0 tshirt, 1 skirt, 2 tshirt), instance 1 a sewing pattern, instance 2 not settled;
+    # every template lies 2 cm below its construction (stage_loop's built_vertices = rest_vertices + 0.02)
+    g = info["garments"]
+    assert (g["instances"], g["pattern"], g["shell"], g["settled"]) == (3, 1, 2, 2)
+    assert g["types"]["tshirt"]["instances"] == 2 and g["types"]["tshirt"]["settled"] == 1
+    assert g["types"]["skirt"]["pattern"] and not g["types"]["tshirt"]["pattern"]
+    assert g["types"]["skirt"]["template_dy_mm"] == pytest.approx(-20.0, abs=1e-3)
+    assert g["types"]["skirt"]["template_distance_mm"] == pytest.approx(20.0 * 3 ** 0.5, abs=1e-3)
+    assert "garments: 3 instances (2 shell, 1 sewing pattern), 2 settled at rest" in text
+    assert "vertical -20.0 mm" in text
     writer = sl.open_writer(tmp_path / "partial", N, durable=False)
     for i in range(3, 7):
         writer.stage_sample(i, *sl.sample(i))
