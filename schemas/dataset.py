@@ -1,4 +1,4 @@
-"""Schema of drape's dataset store (version 5): every group and array of the packed zarr v3 store
+"""Schema of drape's dataset store (version 6): every group and array of the packed zarr v3 store
 with its symbolic shape, dtype, unit and meaning, the table whose rows its first axis runs over,
 and every required root attribute. ``datagen.store`` writes, reads and validates against this
 module and nothing else; ``docs/store.md`` explains it in prose.
@@ -17,20 +17,27 @@ indexed by offset arrays (``index/frame_start``, ``index/vertex_row_start``,
 
 Symbols in shapes (see :data:`DIMENSIONS`) are bound by the data; integers are fixed. No array holds
 text: codes are integers and their names are root attributes (:data:`NAME_LISTS`), so every array
-reads in any zarr v3 reader (tensorstore's ``zarr3`` driver included).
+reads in any zarr v3 reader (tensorstore's ``zarr3`` driver included); the one JSON record a garment
+has (its design, ``garments/design``) is UTF-8 bytes in a uint8 array, so it reads the same way.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-DATASET_SCHEMA_VERSION = 5
-"""5: every motion's recorded poses and translations (``motions/pose``, ``motions/trans``), whether
-its scenes passed or failed, so that a motion model learns every motion of the config. 4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored (they come from
-:mod:`datagen.features`), the subdivided body's topology stored, the fit attribute optional.
+DATASET_SCHEMA_VERSION = 6
+"""6: garments keep their sewing pattern (per-corner 2D rest coordinates, panels, stitches, the design
+as JSON) and ``garments/rest_vertices`` is the settled drape at rest (the builder's construction is
+``garments/built_vertices``). 5: every motion's recorded poses and translations (``motions/pose``,
+``motions/trans``), whether its scenes passed or failed, so that a motion model learns every motion
+of the config. 4: positions quantised (``detail``, ``coarse``), derived arrays no longer stored
+(they come from :mod:`datagen.features`), the subdivided body's topology stored, the fit attribute
+optional.
 3: the code version recorded. 2: the slip metric."""
 
 REFUSED_VERSIONS: dict[int, str] = {
+    5: "version 5 kept the builder's construction as the garment's rest shape (not the settled drape the scenes "
+       "start their motion from) and no sewing pattern (2D rest coordinates, panels, stitches, design)",
     4: "version 4 kept the poses of passed samples only (no motions/pose, motions/trans): a motion whose scenes "
        "all failed was lost to the motion generator",
     3: "version 3 stored the derived arrays (body vertices, anchors, normals, skinning features, joint distances) "
@@ -119,7 +126,8 @@ class ArraySpec:
         minimum: smallest valid value of a code or index array (-1: "none"/"unlabelled").
         finite: float arrays: ``"all"`` (every value finite), ``"ok_samples"`` (finite in samples
             with ``failure == 0``; a failed sample may hold inf/nan from the step that failed) or
-            ``"fitted"`` (finite when the root attribute ``fit_attribute`` is true, NaN otherwise).
+            ``"fitted"`` (finite when the root attribute ``fit_attribute`` is true, NaN otherwise) or
+            ``"pattern"`` (finite on the rows of pattern garments, ``face_panel >= 0``; NaN on shells').
         quantum: positions stored as integers: the value in ``unit`` is ``stored * quantum +`` the
             frame's root joint (``frames/joints[:, 0]``); the writer takes and the reader returns
             float32 metres.
@@ -179,6 +187,8 @@ DIMENSIONS: dict[str, str] = {
     "G": "garment instances",
     "n_garment_vertices": "garment-instance vertices over all instances (sum of V)",
     "n_garment_faces": "garment-instance triangles over all instances (sum of F)",
+    "n_stitches": "stitched vertex pairs over all garment instances (0 for shell garments)",
+    "n_design_bytes": "bytes of the garment instances' design records (UTF-8 JSON; 0 for shell garments)",
     "D": "features of the fit-attribute factor-analysis model (0 when the store has no fit attribute)",
     "E": "edges of the body mesh: midpoint vertices of the subdivided body (vertex B + e on edge e)",
     "Fs": "triangles of the subdivided body (4 Fb)",
@@ -216,6 +226,12 @@ TABLES: dict[str, Table] = {
                             chunking=_ROWS, doc="one rest vertex of one garment instance, instances in order"),
     "garment_face": Table(rows="n_garment_faces", offsets="garments/face_start", offsets_per="garment",
                           chunking=_ROWS, doc="one triangle of one garment instance, instances in order"),
+    "garment_stitch": Table(rows="n_stitches", offsets="garments/stitch_start", offsets_per="garment",
+                            chunking=_SMALL,
+                            doc="one stitched vertex pair of one garment instance, instances in order"),
+    "garment_design": Table(rows="n_design_bytes", offsets="garments/design_start", offsets_per="garment",
+                            chunking=_SMALL,
+                            doc="one byte of one garment instance's design record, instances in order"),
 }
 """Row tables and their chunking (see ``docs/store.md`` for why these sizes)."""
 
@@ -318,8 +334,18 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
             "instance g's vertices are rows vertex_start[g]:vertex_start[g+1]", table="offset"),
     _static("garments/face_start", ("G+1",), "int64", "row",
             "instance g's faces are rows face_start[g]:face_start[g+1]", table="offset"),
-    _static("garments/rest_vertices", ("n_garment_vertices", 3), "float32", "m", "rest shape on the body's rest pose",
-            table="garment_vertex"),
+    _static("garments/stitch_start", ("G+1",), "int64", "row",
+            "instance g's stitches are rows stitch_start[g]:stitch_start[g+1] (none for a shell garment)",
+            table="offset"),
+    _static("garments/design_start", ("G+1",), "int64", "row",
+            "instance g's design record is bytes design_start[g]:design_start[g+1] of garments/design (none for a "
+            "shell garment)", table="offset"),
+    _static("garments/rest_vertices", ("n_garment_vertices", 3), "float32", "m",
+            "the garment's template: at rest on its body in the rest pose, the simulator's settled drape where "
+            "garments/settled is 1 (the builder's construction where it is 0)", table="garment_vertex"),
+    _static("garments/built_vertices", ("n_garment_vertices", 3), "float32", "m",
+            "the builder's construction on the body's rest pose (a pattern garment: sewn), where every scene's "
+            "simulation starts", table="garment_vertex"),
     _static("garments/faces", ("n_garment_faces", 3), "int32", "index",
             "triangles, vertex indices local to the instance (0 .. V-1)", table="garment_face"),
     _static("garments/uv", ("n_garment_vertices", 2), "float32", "m", "material coordinates (weft, warp)",
@@ -333,8 +359,11 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
             table="garment_vertex"),
     _static("garments/skin_weights", ("n_garment_vertices", "J"), "float32", "1", "skinning weights of the vertex",
             table="garment_vertex"),
-    _static("garments/type", ("G",), "int32", "code", "garment type", codes="garment_type_names", table="garment"),
-    _static("garments/seed", ("G",), "int32", "1", "style seed of the instance", table="garment"),
+    _static("garments/type", ("G",), "int32", "code", "garment type: a shell type, or pattern:PROGRAM (a pattern "
+            "program) or pattern:file (a specification file)", codes="garment_type_names", table="garment"),
+    _static("garments/seed", ("G",), "int32", "1", "style seed of the instance (the design seed of a pattern program; "
+            "of a specification file, a digest of its bytes, so (type, seed) is the design's identity)",
+            table="garment"),
     _static("garments/body", ("G",), "int32", "index", "body the instance was made for", index_of="n_bodies",
             table="garment"),
     _static("garments/material", ("G",), "int32", "code", "material", codes="material_names", table="garment"),
@@ -342,6 +371,25 @@ _ARRAY_LIST: tuple[ArraySpec, ...] = (
             "when the store has no fit attribute (root attribute fit_attribute false)", table="garment",
             finite="fitted"),
     _static("garments/rest_area", ("G",), "float32", "m²", "total rest area of the instance", table="garment"),
+    _static("garments/settled", ("G",), "uint8", "bool", "1 when rest_vertices is the settled drape; 0 when every "
+            "settle of the instance failed and rest_vertices is the builder's construction", table="garment"),
+    # --- the sewing pattern of a pattern garment (shell garments: -1, NaN, no rows; docs/store.md)
+    _static("garments/panel", ("n_garment_vertices",), "int32", "index",
+            "panel of each vertex: its index in the design's panels (a welded seam vertex: the panel of its first "
+            "face); -1 for a shell garment", minimum=-1, table="garment_vertex"),
+    _static("garments/face_panel", ("n_garment_faces",), "int32", "index",
+            "panel of each triangle (index in the design's panels); -1 for a shell garment", minimum=-1,
+            table="garment_face"),
+    _static("garments/rest_uv", ("n_garment_faces", 3, 2), "float32", "m",
+            "2D rest coordinate of each triangle corner in its panel's flat pattern (the cloth's rest state; a "
+            "welded seam vertex has one per panel); NaN for a shell garment", table="garment_face",
+            finite="pattern"),
+    _static("garments/stitches", ("n_stitches", 2), "int32", "index",
+            "vertex pairs sewn together, local to the instance (0 .. V-1); a welded seam is one vertex and lists "
+            "no pair", table="garment_stitch"),
+    _static("garments/design", ("n_design_bytes",), "uint8", "utf-8",
+            "the design record of a pattern garment, UTF-8 JSON: {program, seed, source, parameters, pattern "
+            "(GarmentCode specification)}", table="garment_design"),
     # --- the fit-attribute model (factor analysis, paper 000)
     _static("fit/components", (3, "D"), "float32", "m", "factor loadings (in the features' unit)"),
     _static("fit/mean", ("D",), "float32", "m", "feature mean"),

@@ -241,6 +241,12 @@ def _make_pattern(args, out: Path) -> int:
     print(f"wrote {out}: {label} on {args.body}: {len(pattern.panels)} panels, {len(pattern.stitches)} stitches, "
           f"{m.vertex_count} vertices, {m.face_count} faces, {m.rest_area_m2:.2f} m², openings "
           f"{', '.join(garment.loops)}, material {garment.material.name} ({m.build_seconds:.1f} s)")
+    if args.pattern:
+        from datagen.garment.pattern.programs import design_of
+
+        design = ", ".join(f"{k} {v:.3g}" if isinstance(v, float) else f"{k} {v}"
+                           for k, v in design_of(args.pattern, args.seed, **overrides).items())
+        print(f"design ({label}; a store keeps it in garments/design with the pattern): {design}")
     print(f"checks: ok; min angle {c['min_angle_deg']:.1f}° (1st percentile {c['angle_p1_deg']:.1f}°), edge spread "
           f"{c['edge_spread']:.2f}, longest edge {c['edge_max_ratio']:.2f} x median, clearance "
           f"{c['min_clearance'] * 1000:.1f} mm, {c['stitch_pairs']} sewn pairs {c['stitch_gap_mean'] * 100:.1f} cm apart "

@@ -25,7 +25,8 @@ def register(sub, formatter) -> None:
                        "  drape generate --preset paper-motion --out motion.zarr --device cuda --batch-size 252   "
                        "(one batch)")
     p.add_argument("config", nargs="?", default=None, help="dataset config (.toml/.yaml); default: --preset tiny")
-    p.add_argument("--preset", default=None, help="tiny (default), small, medium, paper-gnn, paper-motion")
+    p.add_argument("--preset", default=None, help="tiny (default), small, medium, paper-gnn, paper-motion; NAME-pattern / NAME-shell "
+                   "for sewn pattern garments or shells (the plain names: datagen.generate.config.PRESET_GARMENTS)")
     p.add_argument("--out", required=True, help="the store directory")
     p.add_argument("--executor", default="local", choices=("local", "ray"))
     p.add_argument("--workers", type=int, default=None,
@@ -93,10 +94,14 @@ def _cmd_generate(args) -> int:
     print(f"dataset: {plan.sample_count} scenes ({', '.join(f'{k} {v.scene_count}' for k, v in config.splits.items())}"
           f"), {len(plan.instances)} garment instances, {len(plan.bodies)} bodies, {len(plan.motions)} motions, "
           f"{config.frames} recorded frames each; device {args.device}, executor {args.executor}", flush=True)
+    from datagen.generate.templates import settle_config
+    from datagen.sim.scene import settled_frame
+
     ph = rc.phases(config.frames, config.fps)
     print(f"each scene simulates {sim} frames: {ph['settle_rest']} settling in the rest pose, {ph['lead_in']} leading "
           f"into the motion's first pose, {ph['settle_pose']} holding it and {ph['ramp']} ramping into the motion, then "
-          f"the {ph['recorded']} that are recorded", flush=True)
+          f"the {ph['recorded']} that are recorded; first, each garment instance settles once at rest for its "
+          f"template ({settled_frame(settle_config(rc)) + 1} frames in the rest pose)", flush=True)
     side_by_side = args.executor == "ray" or "," in str(args.device)
     # Ray's tasks, or several devices, run side by side: the frame bar follows the furthest; else a
     # new batch restarts it

@@ -55,6 +55,10 @@ class Animation:
         metadata: what the arrays are (source, sample, split, garment, body, motion, failure, ...).
         title: a one-line description for pictures.
         frame_numbers: the source's frame number of each of these frames [T] (None: 0 .. T-1).
+        garment_st: texture coordinates (m): per triangle corner [F, 3, 2] (a pattern garment's flat
+            panels) or per vertex [V, 2] (a shell's material uv), or None.
+        garment_panel: the pattern panel of every triangle [F], or None (a shell garment).
+        panel_names: the names of the panels, or None.
     """
 
     body_vertices: np.ndarray
@@ -69,6 +73,9 @@ class Animation:
     metadata: dict[str, Any] = field(default_factory=dict)
     title: str = ""
     frame_numbers: np.ndarray | None = None
+    garment_st: np.ndarray | None = None
+    garment_panel: np.ndarray | None = None
+    panel_names: tuple[str, ...] | None = None
 
     @property
     def frame_count(self) -> int:
@@ -98,7 +105,9 @@ class Animation:
         return write_animation_usd(path, self.body_vertices, self.body_faces, self.garment_vertices,
                                    self.garment_faces, self.fps, region=self.region, region_names=self.region_names,
                                    skeleton=self.skeleton if skeleton else None, metadata=self.metadata,
-                                   normals=normals, garment_colors=garment_colors, garment_values=garment_values)
+                                   normals=normals, garment_colors=garment_colors, garment_values=garment_values,
+                                   garment_st=self.garment_st, garment_panel=self.garment_panel,
+                                   panel_names=self.panel_names)
 
 
 # ------------------------------------------------------------------------------------- stores
@@ -217,12 +226,22 @@ def from_store(store, sample: int, *, frames: np.ndarray | None = None, skeleton
         rest_j = model["J_regressor"].astype(np.float64) @ rest_v
         sk = SkeletonAnimation(poses=x["pose"], trans=x["trans"], rest_joints=rest_j, parents=model["parents"],
                                rest_vertices=rest_v, weights=model["weights"])
+    pattern = garment["design"] is not None
+    if pattern:
+        meta |= {"design_program": str(garment["design"].get("program")), "design_seed": int(garment["design"]["seed"])}
+        # panel p's name: the region name of its vertices (a pattern garment's regions are its panels)
+        first = {int(p): int(r) for p, r in zip(garment["panel"][::-1], garment["region"][::-1], strict=True)}
+        panels = [_name(names["region_names"], first[p]) if p in first else f"panel {p}"
+                  for p in range(int(garment["face_panel"].max()) + 1)]
     title = f"sample {i} ({split}): {gtype} on {body_name}, {label}" + (
         f" [failed: {meta['failure']}]" if failure else "")
     return Animation(body_vertices=x["body_vertices"], body_faces=body_faces, garment_vertices=x["detail"],
                      garment_faces=garment["faces"], fps=fps, region=garment["region"],
-                     region_names=tuple(names["region_names"]), garment_rest=garment["rest_vertices"], skeleton=sk,
-                     metadata=meta, title=title, frame_numbers=None if frames is None else index)
+                     region_names=tuple(names["region_names"]), garment_rest=garment["built_vertices"], skeleton=sk,
+                     metadata=meta, title=title, frame_numbers=None if frames is None else index,
+                     garment_st=garment["rest_uv"] if pattern else garment["uv"],
+                     garment_panel=garment["face_panel"] if pattern else None,
+                     panel_names=tuple(panels) if pattern else None)
 
 
 # ------------------------------------------------------------------------------------- npz

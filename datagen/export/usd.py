@@ -9,7 +9,10 @@ or ``.usda`` (text)::
       Body                  Mesh: faces, time-sampled points, normals (vertex) and extent,
                             constant displayColor; without a skeleton (or without skin weights)
       Garment               Mesh: the same, doubleSided; primvars:drape:region (int, vertex) with
-                            customData["drape"]["region_names"]; displayColor per vertex by region
+                            customData["drape"]["region_names"]; displayColor per vertex by region;
+                            primvars:st (texCoord2f[], metres: a pattern garment's flat panel
+                            coordinates, faceVarying; a shell's material uv, vertex) and
+                            primvars:drape:panel (int, uniform: the pattern panel of each triangle)
       Skel                  SkelRoot, only with a skeleton:
         Skeleton            joints (SMPL names as paths), bindTransforms, restTransforms,
                             skel:animationSource -> Animation
@@ -274,7 +277,8 @@ def write_animation_usd(path: str | os.PathLike, body_vertices: np.ndarray, body
                         region: np.ndarray | None = None, region_names: Sequence[str] | None = None,
                         skeleton: SkeletonAnimation | None = None, metadata: Mapping[str, Any] | None = None,
                         normals: bool = True, garment_colors: np.ndarray | None = None,
-                        garment_values: tuple[str, np.ndarray] | None = None) -> Path:
+                        garment_values: tuple[str, np.ndarray] | None = None, garment_st: np.ndarray | None = None,
+                        garment_panel: np.ndarray | None = None, panel_names: Sequence[str] | None = None) -> Path:
     """Write a body and a garment moving together as one USD layer (see the module docstring).
 
     Args:
@@ -295,6 +299,12 @@ def write_animation_usd(path: str | os.PathLike, body_vertices: np.ndarray, body
             ``displayColor`` (e.g. a prediction coloured by its error); replaces the region colours.
         garment_values: (name, [T, V] floats): a time-sampled per-vertex primvar ``drape:<name>``
             (e.g. ``error_mm``), so the values behind the colours travel with the file.
+        garment_st: texture coordinates (m) of the garment: per triangle corner [F, 3, 2] (a pattern
+            garment's flat panel coordinates: a welded seam vertex has one per panel), written as the
+            ``st`` primvar (``texCoord2f[]``, ``faceVarying``, in ``faceVertexIndices`` order), or
+            per vertex [V, 2] (``vertex`` interpolation).
+        garment_panel: panel of every garment triangle [F] (int), the ``drape:panel`` primvar
+            (``uniform``), with ``panel_names`` (one per panel) in its customData.
 
     Returns:
         The path written.
@@ -357,6 +367,18 @@ def write_animation_usd(path: str | os.PathLike, body_vertices: np.ndarray, body
             names = Vt.StringArray([str(n) for n in region_names])
             pv.GetAttr().SetCustomDataByKey("drape:region_names", names)
             garment.GetPrim().SetCustomDataByKey("drape:region_names", names)
+    if garment_st is not None:
+        _write_st(garment, np.asarray(garment_st), len(gf), V)
+    if garment_panel is not None:
+        panel = np.asarray(garment_panel)
+        if panel.shape != (len(gf),) or not np.issubdtype(panel.dtype, np.integer):
+            raise InputError(f"garment_panel must be an integer panel per garment triangle [{len(gf)}], got "
+                             f"{panel.shape} of {panel.dtype}")
+        pv = UsdGeom.PrimvarsAPI(garment).CreatePrimvar("drape:panel", Sdf.ValueTypeNames.IntArray,
+                                                        UsdGeom.Tokens.uniform)
+        pv.Set(Vt.IntArray.FromNumpy(np.ascontiguousarray(panel, dtype=np.int32)))
+        if panel_names is not None:
+            pv.GetAttr().SetCustomDataByKey("drape:panel_names", Vt.StringArray([str(n) for n in panel_names]))
     meshes = [(garment, gv, gf)]
     if not skinned:
         body = define_mesh(stage, f"{ROOT}/Body", bf, color=BODY_COLOR)
@@ -390,6 +412,24 @@ def write_animation_usd(path: str | os.PathLike, body_vertices: np.ndarray, body
     logger.debug("wrote USD %s: %d frames at %g fps, body %d vertices%s, garment %d vertices", path, T, fps, B,
                 " (UsdSkel-skinned)" if skinned else "", V)
     return path
+
+
+def _write_st(mesh, st: np.ndarray, F: int, V: int) -> None:
+    """The ``st`` primvar (texCoord2f[]) of ``mesh``: faceVarying from per-corner [F, 3, 2] values,
+    vertex from per-vertex [V, 2] ones."""
+    from pxr import Sdf, UsdGeom, Vt
+
+    if st.shape == (F, 3, 2):
+        values, interpolation = st.reshape(-1, 2), UsdGeom.Tokens.faceVarying
+    elif st.shape == (V, 2):
+        values, interpolation = st, UsdGeom.Tokens.vertex
+    else:
+        raise InputError(f"garment_st must be per triangle corner [{F}, 3, 2] or per vertex [{V}, 2], got {st.shape}")
+    if not np.isfinite(values).all():
+        raise InputError("garment_st has non-finite values (a shell garment has no flat pattern: give its per-vertex "
+                         "uv, or none)")
+    pv = UsdGeom.PrimvarsAPI(mesh).CreatePrimvar("st", Sdf.ValueTypeNames.TexCoord2fArray, interpolation)
+    pv.Set(Vt.Vec2fArray.FromNumpy(np.ascontiguousarray(values, dtype=np.float32)))
 
 
 def _matrices(translations: np.ndarray):

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
-from datagen.generate.config import DatasetConfig, motion_file, parse_body, parse_garment, parse_motion
+from datagen.generate.config import DatasetConfig, motion_file, parse_body, parse_motion
 
 log = logging.getLogger(__name__)
 
@@ -38,6 +38,8 @@ class Plan:
         self._correspondences: dict[int, dict] = {}  # instance -> garment_correspondence(...)
         self._motion_cache: dict[int, object] = {}  # motion index -> Motion, made on first use
         self.fit_diagnostics: dict | None = None  # set by static_groups()
+        self.templates: list[np.ndarray] | None = None  # the garments settled at rest, set by static_groups()
+        self.template_figures: dict | None = None
         self.bodies: list[str] = []
         self.motions: list[str] = []
         self.instances: list[tuple[str, str]] = []  # (garment "type:seed", body name)
@@ -109,13 +111,22 @@ class Plan:
         """Garment instance g (built once per process)."""
         cache = self._garments
         if g not in cache:
-            from datagen.garment.cache import cached_garment
+            from datagen.generate.garments import build_garment
 
-            kind, seed = parse_garment(self.instances[g][0])
             b = self.bodies.index(self.instances[g][1])
-            cache[g] = cached_garment(kind, self.body_model, self.betas[b], seed=seed,
-                                      target_edge_length=self.config.garment_edge_length)
+            cache[g] = build_garment(self.entry(g), self.body_model, self.betas[b], self.config.garment_edge_length)
         return cache[g]
+
+    def entry(self, g: int):
+        """The parsed config entry of garment instance g (:class:`~datagen.generate.garments.GarmentEntry`)."""
+        from datagen.generate.garments import parse_garment_entry
+
+        return parse_garment_entry(self.instances[g][0])
+
+    def template(self, g: int) -> np.ndarray:
+        """Garment instance g's template [V, 3] (m): its settled drape at rest once
+        :func:`static_groups` has settled the garments, else its construction."""
+        return np.asarray(self.garment(g).vertices if self.templates is None else self.templates[g])
 
     def correspondence(self, g: int) -> dict:
         cache = self._correspondences
@@ -123,18 +134,21 @@ class Plan:
             from datagen.targets import garment_correspondence
 
             b = self.bodies.index(self.instances[g][1])
-            cache[g] = garment_correspondence(self.garment(g).vertices, self.subdivided, self.betas[b])
+            cache[g] = garment_correspondence(self.template(g), self.subdivided, self.betas[b])
         return cache[g]
 
 
 # --------------------------------------------------------------------------------- static groups
 
 
-def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
+def static_groups(plan: Plan, device: str | None = None) -> dict[str, tuple[dict, dict | None]]:
     """group -> (arrays, names) for every static group of the store (the fit group's diagnostics are
-    :meth:`Plan.fit_diagnostics` once this has run)."""
+    :meth:`Plan.fit_diagnostics` once this has run). The garments are settled at rest on ``device``
+    first (:mod:`datagen.generate.templates`): their templates give ``garments/rest_vertices``, the
+    indicator, the skinning weights and the fit attribute."""
     from datagen.body.subdivide import subdivision_edges
-    from datagen.garment.registry import garment_type, garment_type_names
+    from datagen.generate.garments import pattern_arrays, store_type_names
+    from datagen.generate.templates import settle_templates
     from datagen.materials import MATERIALS
     from datagen.motion.labels import LABELS
 
@@ -173,12 +187,18 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
                      *plan.instances[g], len(garments[-1].vertices), seconds, time.perf_counter() - t0)
     regions = sorted({r for g in garments for r in g.region_names})
     materials = list(MATERIALS)
+    templates, settled, plan.template_figures = settle_templates(plan, garments, device)
+    plan.templates = templates
     alpha, fa, plan.fit_diagnostics = fit_alpha(plan, garments)
+    type_names = store_type_names()
+    entries = [plan.entry(g) for g in range(len(garments))]
     vs = np.concatenate([[0], np.cumsum([len(g.vertices) for g in garments])]).astype(np.int64)
     fs = np.concatenate([[0], np.cumsum([len(g.faces) for g in garments])]).astype(np.int64)
     garment_arrays = {
         "vertex_start": vs, "face_start": fs,
-        "rest_vertices": np.concatenate([g.vertices for g in garments]).astype(f32),
+        "rest_vertices": np.concatenate(templates).astype(f32),
+        "built_vertices": np.concatenate([g.vertices for g in garments]).astype(f32),
+        "settled": settled,
         "faces": np.concatenate([g.faces for g in garments]).astype(np.int32),
         "uv": np.concatenate([g.uv for g in garments]).astype(f32),
         "region": np.concatenate([np.array([regions.index(g.region_names[r]) for r in g.vertex_region], np.int32)
@@ -188,19 +208,20 @@ def static_groups(plan: Plan) -> dict[str, tuple[dict, dict | None]]:
             np.int32),
         "skin_weights": np.concatenate([plan.correspondence(g)["skin_weights"] for g in range(len(garments))]).astype(
             f32),
-        "type": np.array([garment_type(parse_garment(i[0])[0]).code for i in plan.instances], np.int32),
-        "seed": np.array([parse_garment(i[0])[1] for i in plan.instances], np.int32),
+        "type": np.array([type_names.index(e.type_name) for e in entries], np.int32),
+        "seed": np.array([e.seed for e in entries], np.int32),
         "body": np.array([plan.bodies.index(i[1]) for i in plan.instances], np.int32),
         "material": np.array([materials.index(g.material.name) for g in garments], np.int32),
         "alpha": alpha,
         "rest_area": np.array([_area(g.vertices, g.faces) if g.metadata.rest_area_m2 is None else g.metadata.rest_area_m2
                                for g in garments], f32),
+        **pattern_arrays(entries, garments),
     }
     return {
         "body": (body, None),
         "bodies": ({"betas": plan.betas.astype(f32)}, {"body_names": list(plan.bodies)}),
         "motions": (motion_arrays, {"label_names": list(LABELS)}),
-        "garments": (garment_arrays, {"garment_type_names": garment_type_names(), "material_names": materials,
+        "garments": (garment_arrays, {"garment_type_names": type_names, "material_names": materials,
                                       "region_names": regions}),
         "fit": ({"components": fa["components"].astype(f32), "mean": fa["mean"].astype(f32),
                  "noise_variance": fa["noise_variance"].astype(f32), "subsample": fa["subsample"]}, None),
@@ -223,7 +244,7 @@ def fit_alpha(plan: Plan, garments: list) -> tuple[np.ndarray, dict, dict]:
     pairs = []
     for g in range(G):
         b = plan.bodies.index(plan.instances[g][1])
-        pairs.append(fit_pair(garments[g].vertices, garments[g].faces, plan.subdivided, plan.betas[b],
+        pairs.append(fit_pair(plan.template(g), garments[g].faces, plan.subdivided, plan.betas[b],
                               indicator=plan.correspondence(g)["indicator"]))
     train = [pairs[g] for g in sorted({s.garment for s in plan.scenes if s.split == "train"})]
     fit = fit_attribute_model(train, factor_count=FIT_FACTORS, subsample_count=min(len(g.vertices) for g in garments),

@@ -148,9 +148,10 @@ def preflight(plan, out: str | Path, *, executor: str, device: str | None, worke
     edge_scale = 1.0
     if c.garment_edge_length is not None:
         from datagen.garment.types import GARMENT_TYPES
+        from datagen.generate.garments import PATTERN_EDGE_LENGTH
 
         kinds = {parse_garment(g)[0] for s in c.splits.values() for g in s.garments}
-        default = min(GARMENT_TYPES[k].edge_length for k in kinds)
+        default = min(GARMENT_TYPES[k].edge_length if k in GARMENT_TYPES else PATTERN_EDGE_LENGTH for k in kinds)
         edge_scale = (default / c.garment_edge_length) ** 2
     disk = plan.sample_count * c.frames * NOMINAL_GARMENT_VERTICES * edge_scale * DISK_BYTES_PER_VERTEX_FRAME
     where = out if out.exists() else next((p for p in out.absolute().parents if p.exists()), Path("/"))
@@ -169,7 +170,7 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
         return {"samples": plan.sample_count, "simulated": 0, "seconds": 0.0, "complete": True}
     t0 = time.perf_counter()
     if writer.missing_static():
-        for group, (arrays, names) in static_groups(plan).items():
+        for group, (arrays, names) in static_groups(plan, parse_devices(device)[0]).items():
             writer.stage_static(group, arrays, names=names,
                                 **({"diagnostics": plan.fit_diagnostics} if group == "fit" else {}))
     todo = writer.missing(range(plan.sample_count))

@@ -140,6 +140,10 @@ class SceneResult:
         failure: why the scene failed, or None.
         failure_frame: the frame (index into ``metrics``) where it first failed, or -1.
         seconds: wall time of the batch this scene was in.
+        settled: the garment at rest [V, 3] (m, float32): its positions at the end of the settle in
+            the body's rest pose, before the lead-in and the motion, in the frame of the garment it
+            was given (the lead-in's shift to the motion's first translation taken off): the
+            garment's template (a store's ``garments/rest_vertices``).
     """
 
     positions: np.ndarray
@@ -154,17 +158,20 @@ class SceneResult:
     failure: Failure | None
     failure_frame: int
     seconds: float
+    settled: np.ndarray | None = None
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The result as named arrays (what :meth:`save` writes): ``garment_vertices``,
         ``garment_faces``, ``body_vertices``, ``fps``, ``pose``/``trans`` when known, the run's
         ``recorded_from``, ``motion_from``, ``failure`` (code, empty when none), ``failure_message``,
-        ``failure_frame`` and ``metric_<name>`` per simulated frame."""
+        ``failure_frame``, ``settled`` (the garment at rest) and ``metric_<name>`` per simulated frame."""
         out = {"garment_vertices": self.positions, "garment_faces": self.faces, "body_vertices": self.body_vertices,
                "fps": np.float64(self.fps), "recorded_from": self.recorded_from, "motion_from": self.motion_from,
                "failure": "" if self.failure is None else self.failure.code,
                "failure_message": "" if self.failure is None else self.failure.message,
                "failure_frame": self.failure_frame, **{f"metric_{k}": v for k, v in self.metrics.items()}}
+        if self.settled is not None:
+            out["settled"] = self.settled
         if self.poses is not None:
             out.update(pose=self.poses.astype(np.float32), trans=self.trans.astype(np.float32))
         return out
@@ -212,6 +219,8 @@ class SceneArrays:
             None: the body is one part).
         poses: the pose of every body frame [N, 24, 3] (rad, axis-angle), or None.
         trans: the root translation of every body frame [N, 3] (m), or None.
+        garment_shift: the translation [3] (m) added to the given garment's vertices to put it at the
+            motion's first translation (taken off again for :attr:`SceneResult.settled`).
     """
 
     garment_vertices: np.ndarray
@@ -226,6 +235,7 @@ class SceneArrays:
     body_face_part: np.ndarray | None = None
     poses: np.ndarray | None = None
     trans: np.ndarray | None = None
+    garment_shift: np.ndarray = field(default_factory=lambda: np.zeros(3))
 
     def __post_init__(self):
         if not isinstance(self.material, Material):
@@ -282,7 +292,7 @@ def scene_arrays(scene: Scene, lead_in: float, posed: tuple | None = None) -> Sc
                        body_frames=verts, body_faces=np.asarray(s.body.faces),
                        fps=float(s.motion.fps), lead_frames=lead, body_face_part=parts,
                        poses=np.asarray(motion.poses).reshape(motion.frame_count, 24, 3),
-                       trans=np.asarray(motion.trans).reshape(motion.frame_count, 3))
+                       trans=np.asarray(motion.trans).reshape(motion.frame_count, 3), garment_shift=np.asarray(shift))
 
 
 def batch_arrays(scenes: list, lead_in: float, device: str | None = None) -> list[SceneArrays]:
@@ -336,6 +346,12 @@ def frame_schedule(config: RunConfig, lead: int, n_motion: int, fps: float) -> t
                 + [float(i) for i in range(lead + motion_from + 1, n_motion)])
     # the first recorded frame is motion frame ``motion_from``: the last of the ramp (or of the pose settle)
     return schedule, config.settle_rest + lead + config.settle_pose + ramp - 1
+
+
+def settled_frame(config: RunConfig) -> int:
+    """The simulated frame at whose end the garment is at rest in the body's rest pose: the last frame
+    before the lead-in (what :attr:`SceneResult.settled` holds)."""
+    return config.settle_rest - 1
 
 
 def body_at(frames: np.ndarray, src: float) -> np.ndarray:
@@ -401,6 +417,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     failure: list[Failure | None] = [None] * len(scenes)
     failure_frame = [-1] * len(scenes)
     positions = []
+    settled_at, settled = settled_frame(config), None
     start = time.perf_counter()
     dt = 1.0 / fps
 
@@ -431,6 +448,8 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                         log.warning("scene %d failed at frame %d: %s", s, f, why)
                         if config.freeze_failed:
                             solver.freeze(state_a, s)
+            if f == settled_at:
+                settled = state_a.positions.numpy().copy()
             if f >= recorded_from:
                 positions.append(state_a.positions.numpy().copy())  # on the CPU .numpy() is a view of the buffer
             frame_seconds.append(time.perf_counter() - t_frame)
@@ -457,5 +476,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                                trans=None if a.trans is None else np.asarray(a.trans[rec]), fps=fps,
                                recorded_from=recorded_from, motion_from=motion_from,
                                metrics={k: np.array([v[s] for v in series[k]]) for k in METRIC_NAMES},
-                               failure=failure[s], failure_frame=failure_frame[s], seconds=seconds))
+                               failure=failure[s], failure_frame=failure_frame[s], seconds=seconds,
+                               settled=None if settled is None else
+                               (settled[sel] - a.garment_shift).astype(np.float32)))
     return out

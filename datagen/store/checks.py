@@ -16,7 +16,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.geometry.positions import encode_positions
 from datagen.store.layout import specs_of_group
-from datagen.store.validation import Dimensions, value_problems
+from datagen.store.validation import Dimensions, pattern_problems, value_problems
 from schemas.dataset import ARRAYS, NAME_LISTS, SPLIT_NAMES, STATIC_GROUPS, ArraySpec
 
 __all__ = ["RANGED", "SAMPLE_ARRAYS", "SAMPLE_SCALARS", "check_sample", "check_static", "raise_problems"]
@@ -214,10 +214,16 @@ def check_static(group: str, arrays: Mapping[str, Any], names: Mapping[str, Any]
         upper = len(out_names[spec.codes]) if spec.codes in out_names else dims.sizes.get(spec.index_of or "")
         if spec.finite == "fitted" and np.isnan(arr).all():  # no fit attribute in this store
             continue
+        if spec.finite == "pattern" and "face_panel" in out:  # NaN on shell garments' rows, finite on patterns'
+            pattern = out["face_panel"] >= 0
+            if not np.isnan(arr[~pattern]).all():
+                problems.append(f"{where}: '{name}' must be NaN on the rows of shell garments (face_panel -1)")
+            arr = arr[pattern]
         if spec.unit != "row":
             problems += [f"{where}: {p}" for p in value_problems(spec, arr, name=name, upper=upper)]
     if group == "garments":
-        for key, rows in (("vertex_start", "n_garment_vertices"), ("face_start", "n_garment_faces")):
+        for key, rows in (("vertex_start", "n_garment_vertices"), ("face_start", "n_garment_faces"),
+                          ("stitch_start", "n_stitches"), ("design_start", "n_design_bytes")):
             off = out[key]
             if off[0] != 0 or np.any(np.diff(off) < 0) or off[-1] != dims.sizes[rows]:
                 problems.append(f"{where}: '{key}' must start at 0, never decrease and end at {dims.sizes[rows]} "
@@ -229,7 +235,9 @@ def check_static(group: str, arrays: Mapping[str, Any], names: Mapping[str, Any]
                 g = int(np.searchsorted(out["face_start"], bad[0], side="right") - 1)
                 problems.append(f"{where}: 'faces' row {bad[0]} (instance {g}) has {out['faces'][bad[0]].tolist()}; "
                                 f"indices must be local to the instance (0 .. {Vg[bad[0]] - 1})")
+            problems += pattern_problems(out, where)
     if group == "body" and out["parents"][0] != -1:
         problems.append(f"{where}: 'parents'[0] must be -1 (the root)")
     raise_problems(problems, "Fix the static arrays and stage them again.")
     return out, out_names, {k: v for k, v in dims.sizes.items()}
+

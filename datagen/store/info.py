@@ -30,7 +30,8 @@ def store_info(path: str | Path) -> dict[str, Any]:
         ``segment_length``; for a complete store ``splits`` (name -> samples, ok, failed, frames,
         sim_frames, vertex_rows, segments, garment_instances, bodies, motions), ``totals`` (the same
         over all samples), ``static`` (garment instances, bodies, motions, body vertices, fit features),
-        ``sizes`` (group -> bytes on disk and uncompressed) and ``failures`` (one row per failure
+        ``sizes`` (group -> bytes on disk and uncompressed), ``garments`` (instances, shells, sewing
+        patterns, settled; per type the template's mean move from the construction) and ``failures`` (one row per failure
         code that occurs: code, name, count, share, per split, median failure frame); for a store in
         progress ``staged``, ``missing``, ``static_staged`` and ``failures`` over the staged samples.
     """
@@ -91,12 +92,58 @@ def store_info(path: str | Path) -> dict[str, Any]:
     per_frame = sum(sizes.get(g, {}).get("on_disk", 0) for g in ("vertex_frames", "frames"))
     info["bytes_per_garment_frame"] = per_frame / frames if frames else None
     info["fit"] = {"fitted": attrs.get("fit_attribute"), **(attrs.get("fit_diagnostics") or {})}
+    info["garments"] = _garment_rows(store, list(attrs.get("garment_type_names", [])))
     from datagen.store.validation import file_problems
 
     info["damage"] = file_problems(path, attrs, meta, quick=True)[0]  # missing shard files (cheap)
     ff = idx["failure_frame"]
     info["failures"] = _failure_rows(failure, split, ff, failure_names)
     return info
+
+
+def _garment_rows(store, type_names: list[str]) -> dict[str, Any] | None:
+    """The garment instances by type: how many, shells or sewing patterns, how many settled at rest,
+    and how far the template (the settled drape) lies from the construction: the mean vertical move
+    and the mean distance per vertex (mm). None when a garments shard is damaged (reported apart)."""
+    from datagen.store.integrity import DamagedStoreError
+
+    try:
+        gtype, settled = store.read("garments/type"), store.read("garments/settled")
+        vs, ds = store.read("garments/vertex_start"), store.read("garments/design_start")
+        rest, built = store.read("garments/rest_vertices"), store.read("garments/built_vertices")
+    except DamagedStoreError:
+        return None
+    move = rest.astype(np.float64) - built
+    rows: dict[str, dict] = {}
+    for g in range(len(gtype)):
+        name = type_names[gtype[g]] if 0 <= gtype[g] < len(type_names) else f"type {gtype[g]}"
+        r = rows.setdefault(name, {"instances": 0, "pattern": bool(ds[g + 1] > ds[g]), "settled": 0, "dy": [],
+                                   "distance": []})
+        r["instances"] += 1
+        r["settled"] += int(settled[g])
+        if settled[g]:
+            m = move[vs[g]:vs[g + 1]]
+            r["dy"].append(float(m[:, 1].mean()))
+            r["distance"].append(float(np.linalg.norm(m, axis=1).mean()))
+    for r in rows.values():
+        dy, dist = r.pop("dy"), r.pop("distance")
+        r["template_dy_mm"] = 1000 * float(np.mean(dy)) if dy else None
+        r["template_distance_mm"] = 1000 * float(np.mean(dist)) if dist else None
+    pattern = int((np.diff(ds) > 0).sum())
+    return {"instances": len(gtype), "pattern": pattern, "shell": len(gtype) - pattern,
+            "settled": int(settled.sum()), "types": rows}
+
+
+def _garment_lines(garments: dict | None) -> list[str]:
+    if not garments:
+        return []
+    out = [f"garments: {garments['instances']} instances ({garments['shell']} shell, {garments['pattern']} sewing "
+           f"pattern), {garments['settled']} settled at rest (their template); template - construction per type:"]
+    for name, r in garments["types"].items():
+        move = ("not settled" if r["template_dy_mm"] is None else
+                f"vertical {r['template_dy_mm']:+.1f} mm, {r['template_distance_mm']:.1f} mm per vertex on average")
+        out.append(f"  {name:<24}{r['instances']:>4} x, {r['settled']} settled: {move}")
+    return out
 
 
 def _failure_rows(failure: np.ndarray, split: np.ndarray, failure_frame: np.ndarray, names: list[str]) -> list[dict]:
@@ -187,6 +234,7 @@ def format_store_info(info: dict[str, Any]) -> str:
                      f"{_bytes(sum(v['uncompressed'] for v in info['sizes'].values())):>14}")
         if info.get("bytes_per_garment_frame"):
             lines.append(f"per stored garment-frame (vertex_frames + frames): {_bytes(info['bytes_per_garment_frame'])}")
+        lines += [""] + _garment_lines(info.get("garments"))
         lines += [""] + _fit_lines(info.get("fit") or {})
         if info.get("damage"):
             lines += ["", f"DAMAGED: {len(info['damage'])} problem(s); run `drape validate` for all of them:"]

@@ -258,3 +258,15 @@ def segment_table(frame_counts: np.ndarray, failure: np.ndarray, segment_length:
                                                    strict=True)) if f == 0
             for t0 in range(0, T - segment_length + 1, segment_length)]
     return np.asarray(rows, dtype=np.int64).reshape(-1, 2)
+
+
+def design_record(design: np.ndarray, design_start: np.ndarray, g: int) -> dict | None:
+    """The design record of garment instance ``g`` (the JSON of ``garments/design``), or None for a
+    shell garment (no bytes). Raises ValueError when the bytes are not UTF-8 JSON of an object."""
+    raw = bytes(np.asarray(design[int(design_start[g]):int(design_start[g + 1])], dtype=np.uint8))
+    if not raw:
+        return None
+    record = json.loads(raw.decode("utf-8"))
+    if not isinstance(record, dict):
+        raise ValueError("a design record is a JSON object")
+    return record

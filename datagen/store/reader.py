@@ -30,7 +30,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.geometry.positions import decode_positions
 from datagen.store.integrity import ShardGuard
-from datagen.store.layout import read_root_metadata
+from datagen.store.layout import design_record, read_root_metadata
 from schemas.dataset import (
     ARRAYS,
     DATASET_SCHEMA_VERSION,
@@ -300,6 +300,8 @@ class DatasetStore:
             idx["vertex_start"] = vrs[idx["frame_start"]]
             idx["garment_vertex_start"] = self.rows.read_all("garments/vertex_start")
             idx["garment_face_start"] = self.rows.read_all("garments/face_start")
+            idx["garment_stitch_start"] = self.rows.read_all("garments/stitch_start")
+            idx["garment_design_start"] = self.rows.read_all("garments/design_start")
             idx["vertex_count"] = np.diff(idx["garment_vertex_start"])[idx["garment"]] if len(idx["garment"]) \
                 else np.zeros(0, np.int64)
             idx["segments"] = self.rows.read_all("index/segments")
@@ -554,20 +556,28 @@ class DatasetStore:
         return len(self.index["garment_vertex_start"]) - 1
 
     def garment(self, g: int) -> dict[str, Any]:
-        """Garment instance ``g``: rest mesh (``rest_vertices`` [V, 3] m, ``faces`` [F, 3] local
-        indices, ``uv``, ``region``, ``seam``, ``indicator``, ``skin_weights``) and its attributes
-        (``type``, ``seed``, ``body``, ``material``, ``alpha`` [3], ``rest_area``)."""
+        """Garment instance ``g``: its template (``rest_vertices`` [V, 3] m: the settled drape at rest,
+        where ``settled``), ``built_vertices`` [V, 3] (the construction the simulation starts from),
+        ``faces`` [F, 3] local indices, ``uv``, ``region``, ``seam``, ``indicator``, ``skin_weights``, its
+        attributes (``type``, ``seed``, ``body``, ``material``, ``alpha`` [3], ``rest_area``, ``settled``)
+        and its sewing pattern: ``panel`` [V], ``face_panel`` [F], ``rest_uv`` [F, 3, 2] (m, per corner),
+        ``stitches`` [P, 2] and ``design`` (the design record as a dict: program, seed, source,
+        parameters, pattern), or -1, NaN, no rows and None for a shell garment."""
         if isinstance(g, bool) or not isinstance(g, (int, np.integer)) or not 0 <= g < self.garment_count:
             raise IndexError(f"garment instance {g!r} is not in 0 .. {self.garment_count - 1}")
-        vs, fs = self.index["garment_vertex_start"], self.index["garment_face_start"]
+        idx = self.index
+        starts = {"garment_vertex": idx["garment_vertex_start"], "garment_face": idx["garment_face_start"],
+                  "garment_stitch": idx["garment_stitch_start"], "garment_design": idx["garment_design_start"]}
         specs = [a for a in ARRAYS.values() if a.group == "garments" and a.table != "offset"]
         requests = []
         for a in specs:
-            start, stop = ((vs[g], vs[g + 1]) if a.table == "garment_vertex" else
-                           (fs[g], fs[g + 1]) if a.table == "garment_face" else (g, g + 1))
+            off = starts.get(a.table)
+            start, stop = (off[g], off[g + 1]) if off is not None else (g, g + 1)
             requests.append((a.path, int(start), int(stop)))
         data = self.rows.read_many(requests)
-        return {a.name: (d if a.table != "garment" else d[0]) for a, d in zip(specs, data, strict=True)}
+        out = {a.name: (d if a.table != "garment" else d[0]) for a, d in zip(specs, data, strict=True)}
+        out["design"] = design_record(out["design"], np.array([0, len(out["design"])]), 0)
+        return out
 
     def group(self, name: str) -> dict[str, np.ndarray]:
         """Every array of a static group (``body``, ``bodies``, ``motions``, ``garments``, ``fit``), whole."""

@@ -140,6 +140,39 @@ def value_problems(spec: ArraySpec, values: np.ndarray, *, name: str | None = No
     return out
 
 
+def pattern_problems(a: dict[str, np.ndarray], where: str) -> list[str]:
+    """What is wrong with the pattern arrays of a garments group ``a`` (every array, offsets checked):
+    a garment is a pattern garment (panels >= 0, a design record, finite corner coordinates) or a
+    shell (-1, none, NaN) throughout; stitches local to their instance; each design record UTF-8
+    JSON of an object."""
+    out: list[str] = []
+    vs, fs, ss, ds = (np.asarray(a[k]) for k in ("vertex_start", "face_start", "stitch_start", "design_start"))
+    from datagen.store.layout import design_record
+
+    for g in range(len(vs) - 1):
+        panel, face_panel = a["panel"][vs[g]:vs[g + 1]], a["face_panel"][fs[g]:fs[g + 1]]
+        try:
+            record = design_record(a["design"], ds, g)
+        except ValueError as exc:
+            out.append(f"{where}: 'design' of instance {g} is not UTF-8 JSON of an object ({exc})")
+            continue
+        kinds = {"panel": bool(len(panel)) and bool((panel >= 0).all()),
+                 "face_panel": bool(len(face_panel)) and bool((face_panel >= 0).all()), "design": record is not None}
+        shell = {"panel": bool((panel == -1).all()), "face_panel": bool((face_panel == -1).all()),
+                 "design": record is None}
+        if not (all(kinds.values()) or all(shell.values()) and ss[g + 1] == ss[g]):
+            out.append(f"{where}: instance {g} is neither a pattern garment (panel and face_panel >= 0, a design "
+                       "record) nor a shell garment (panel and face_panel -1, no stitches, no design record)")
+        st = a["stitches"][ss[g]:ss[g + 1]]
+        V = int(vs[g + 1] - vs[g])
+        if st.size and (st.min() < 0 or st.max() >= V):
+            out.append(f"{where}: 'stitches' of instance {g} has vertex {int(st.min() if st.min() < 0 else st.max())}"
+                       f"; indices must be local to the instance (0 .. {V - 1})")
+        if len(out) > 10:
+            break
+    return out
+
+
 # --------------------------------------------------------------------------------------------- validate
 
 
@@ -263,6 +296,7 @@ def validate(path: str | Path, *, check_values: bool = True, quick: bool = False
     checker.values(check_values)
     checker.subdivision()
     checker.samples()
+    checker.patterns()
     if check_values:
         checker.motions()
     checker.segments()
@@ -384,6 +418,8 @@ class _Checker:
         self.vrow_start = self._offsets("index/vertex_row_start", n.get("n_vertex_rows"), "vertex_frame")
         self.gv_start = self._offsets("garments/vertex_start", n.get("n_garment_vertices"), "garment_vertex")
         self.gf_start = self._offsets("garments/face_start", n.get("n_garment_faces"), "garment_face")
+        self.gs_start = self._offsets("garments/stitch_start", n.get("n_stitches"), "garment_stitch")
+        self.gd_start = self._offsets("garments/design_start", n.get("n_design_bytes"), "garment_design")
 
     def upper(self, spec: ArraySpec) -> int | None:
         if spec.codes:
@@ -420,6 +456,15 @@ class _Checker:
                     self.say(f"'{path}' must be NaN everywhere: the store has no fit attribute "
                              "(root attribute fit_attribute is false)")
                 return
+            if is_float and spec.finite == "pattern":
+                face_panel = self.get("garments/face_panel")
+                if face_panel is None or len(face_panel) != arr.shape[0]:
+                    return  # reported by the shape checks
+                shell = face_panel[start:start + len(block)] < 0
+                if not np.isnan(block[shell]).all():
+                    self.say(f"'{path}' must be NaN on the rows of shell garments (garments/face_panel -1)")
+                    return
+                block = np.where(shell.reshape(-1, *([1] * (block.ndim - 1))), 0, block)
             if is_float and spec.finite == "ok_samples" and failed_rows is not None:
                 skip = failed_rows[start:start + len(block)]
                 if skip.any():  # a failed sample's metrics may be inf/nan
@@ -523,6 +568,19 @@ class _Checker:
                 g = int(np.searchsorted(self.gf_start, r, side="right") - 1)
                 self.say(f"'garments/faces' row {r} (garment instance {g}, face {r - self.gf_start[g]}) has "
                          f"{faces[r].tolist()}: indices must be local to the instance (0 .. {Vg[r] - 1})")
+
+    def patterns(self) -> None:
+        """Every garment instance a pattern garment or a shell throughout; stitches local; design records
+        UTF-8 JSON (:func:`datagen.store.checks.pattern_problems`)."""
+        names = ("vertex_start", "face_start", "stitch_start", "design_start", "panel", "face_panel", "stitches",
+                 "design")
+        if any(x is None for x in (self.gv_start, self.gf_start, self.gs_start, self.gd_start)):
+            return
+        a = {k: self.get(f"garments/{k}") for k in names}
+        if any(v is None for v in a.values()) or len(a["panel"]) != self.gv_start[-1] \
+                or len(a["face_panel"]) != self.gf_start[-1]:
+            return
+        self.problems.extend(pattern_problems(a, "garments"))
 
     def motions(self) -> None:
         """Every passed sample's recorded poses and translations are its motion's (the first ``T`` of

@@ -123,6 +123,46 @@ def test_writer_on_plain_arrays_round_trips_and_validates(tmp_path):
     assert len(g.GetDisplayColorAttr().Get()) == len(region)
 
 
+def test_pattern_uvs_and_panels_are_st_and_panel_primvars_usd_accepts(tmp_path):
+    """A pattern garment's flat panel coordinates per triangle corner become the faceVarying ``st``
+    primvar (texCoord2f[], in faceVertexIndices order), its panels a uniform int primvar; a shell's
+    per-vertex uv a vertex ``st``; usd-core's validators accept both."""
+    pytest.importorskip("pxr", reason="USD export needs usd-core (pip install 'drape[usd]')")
+    from pxr import Sdf, UsdGeom
+
+    from datagen.export.usd import usd_validation_errors, write_animation_usd
+
+    body, bf, garment, gf, region, _ = synthetic()
+    F, V = len(gf), garment.shape[1]
+    corner = np.random.default_rng(3).random((F, 3, 2)).astype(np.float32)
+    panel = (np.arange(F) % 2).astype(np.int32)
+    path = write_animation_usd(tmp_path / "p.usda", body, bf, garment, gf, 24.0, garment_st=corner,
+                               garment_panel=panel, panel_names=["front", "back"])
+    assert usd_validation_errors(path) == []
+    stage = stage_of(path)
+    g = UsdGeom.Mesh(stage.GetPrimAtPath("/Drape/Garment"))
+    st = UsdGeom.PrimvarsAPI(g).GetPrimvar("st")
+    assert st.GetInterpolation() == UsdGeom.Tokens.faceVarying and st.GetTypeName() == Sdf.ValueTypeNames.TexCoord2fArray
+    np.testing.assert_array_equal(np.asarray(st.Get()), corner.reshape(-1, 2))
+    pv = UsdGeom.PrimvarsAPI(g).GetPrimvar("drape:panel")
+    assert pv.GetInterpolation() == UsdGeom.Tokens.uniform
+    np.testing.assert_array_equal(np.asarray(pv.Get()), panel)
+    assert list(pv.GetAttr().GetCustomDataByKey("drape:panel_names")) == ["front", "back"]
+    uv = np.random.default_rng(4).random((V, 2)).astype(np.float32)
+    path = write_animation_usd(tmp_path / "s.usd", body, bf, garment, gf, 24.0, garment_st=uv)
+    assert usd_validation_errors(path) == []
+    stage = stage_of(path)
+    st = UsdGeom.PrimvarsAPI(UsdGeom.Mesh(stage.GetPrimAtPath("/Drape/Garment"))).GetPrimvar("st")
+    assert st.GetInterpolation() == UsdGeom.Tokens.vertex
+    np.testing.assert_array_equal(np.asarray(st.Get()), uv)
+    with pytest.raises(InputError, match="per triangle corner"):
+        write_animation_usd(tmp_path / "x.usda", body, bf, garment, gf, 24.0, garment_st=uv[:-1])
+    with pytest.raises(InputError, match="non-finite"):
+        write_animation_usd(tmp_path / "x.usda", body, bf, garment, gf, 24.0, garment_st=np.full((F, 3, 2), np.nan))
+    with pytest.raises(InputError, match="integer panel per garment triangle"):
+        write_animation_usd(tmp_path / "x.usda", body, bf, garment, gf, 24.0, garment_panel=panel[:-1])
+
+
 def test_writer_refuses_bad_arrays_and_paths(tmp_path):
     pytest.importorskip("pxr", reason="USD export needs usd-core (pip install 'drape[usd]')")
     from datagen.export.usd import write_animation_usd
@@ -316,6 +356,9 @@ def test_store_sample_to_usd_round_trips(store_path, store, ok_sample, tmp_path,
     np.testing.assert_array_equal(np.asarray(pv.Get()), g["region"])
     assert tuple(pv.GetAttr().GetCustomDataByKey("drape:region_names")) == store.names["region_names"]
     assert len(garment.GetDisplayColorAttr().Get()) == len(g["region"])
+    st = UsdGeom.PrimvarsAPI(garment).GetPrimvar("st")  # a shell garment: its material uv per vertex
+    assert st.GetInterpolation() == UsdGeom.Tokens.vertex
+    np.testing.assert_array_equal(np.asarray(st.Get()), g["uv"])
     root = stage.GetDefaultPrim()
     assert root.GetCustomDataByKey("drape:sample") == i
     assert root.GetCustomDataByKey("drape:split") == store.names["split_names"][store.scalars(i)["split"]]

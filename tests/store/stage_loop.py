@@ -68,7 +68,10 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
         "type": np.arange(G, dtype=np.int32) % 2, "seed": np.arange(G, dtype=np.int32) + 7,
         "body": np.arange(G, dtype=np.int32), "material": np.zeros(G, np.int32),
         "alpha": rng.normal(size=(G, 3)).astype(f32), "rest_area": rng.random(G).astype(f32),
+        "settled": np.array([1, 1, 0] * G, np.uint8)[:G],
+        **pattern_arrays(V, F, rng),
     }
+    garments["built_vertices"] = garments["rest_vertices"] + f32(0.02)
     D = 12
     fit = {"components": rng.normal(size=(3, D)).astype(f32), "mean": rng.normal(size=D).astype(f32),
            "noise_variance": rng.random(D).astype(f32), "subsample": np.array([1, D, 0], dtype=np.int64)}
@@ -80,6 +83,40 @@ def static_groups(garment_vertices=GARMENT_VERTICES, garment_faces=GARMENT_FACES
                                 "region_names": REGION_NAMES}),
         "fit": (fit, {}),
     }
+
+
+PATTERN_GARMENT = 1
+"""The synthetic garment instance that is a pattern garment (the others are shells)."""
+
+
+def design(g: int) -> dict:
+    """The design record of synthetic pattern garment ``g``."""
+    return {"program": "skirt_straight", "seed": g + 7, "source": "program", "parameters": {"length": 0.5 + g},
+            "pattern": {"pattern": {"panels": {"front": {}, "back": {}}}, "name": "skirt é"}}
+
+
+def pattern_arrays(V, F, rng) -> dict[str, np.ndarray]:
+    """The pattern arrays of the synthetic garments: instance :data:`PATTERN_GARMENT` has two panels,
+    per-corner rest coordinates, stitches and a design record; the others are shells (-1, NaN, none)."""
+    import json
+
+    panel, face_panel, rest_uv, stitches, designs = [], [], [], [], []
+    stitch_start, design_start = [0], [0]
+    for g, (v, f) in enumerate(zip(V, F, strict=True)):
+        pattern = g == PATTERN_GARMENT
+        panel.append(np.arange(v) % 2 if pattern else np.full(v, -1))
+        face_panel.append(np.arange(f) % 2 if pattern else np.full(f, -1))
+        rest_uv.append(rng.random((f, 3, 2)) if pattern else np.full((f, 3, 2), np.nan))
+        st = np.array([[0, v - 1], [1, v - 2]]) if pattern else np.zeros((0, 2))
+        raw = json.dumps(design(g)).encode() if pattern else b""
+        stitches.append(st)
+        designs.append(np.frombuffer(raw, np.uint8))
+        stitch_start.append(stitch_start[-1] + len(st))
+        design_start.append(design_start[-1] + len(raw))
+    return {"panel": np.concatenate(panel).astype(np.int32), "face_panel": np.concatenate(face_panel).astype(np.int32),
+            "rest_uv": np.concatenate(rest_uv).astype(np.float32), "stitches": np.concatenate(stitches).astype(np.int32),
+            "design": np.concatenate(designs).astype(np.uint8),
+            "stitch_start": np.array(stitch_start, np.int64), "design_start": np.array(design_start, np.int64)}
 
 
 MOTION_FRAMES = 8

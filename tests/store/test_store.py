@@ -102,7 +102,8 @@ def test_round_trip_equals_inputs(packed, backend):
     for group, (arrays, names) in static.items():
         got = store.group(group)
         for name, value in arrays.items():
-            assert got[name].dtype == value.dtype and np.array_equal(got[name], value), (group, name)
+            assert got[name].dtype == value.dtype and np.array_equal(got[name], value,
+                                                                     equal_nan=value.dtype.kind == "f"), (group, name)
         for key, value in names.items():
             assert list(store.names[key]) == value
     assert np.array_equal(store.body_model()["shapedirs"], static["body"][0]["shapedirs"])
@@ -117,6 +118,19 @@ def test_round_trip_equals_inputs(packed, backend):
         assert np.array_equal(mesh["rest_vertices"], g["rest_vertices"][v0:v1])
         assert np.array_equal(mesh["faces"], g["faces"][f0:f1]) and mesh["faces"].max() < v1 - v0
         assert mesh["type"] == g["type"][k] and np.array_equal(mesh["alpha"], g["alpha"][k])
+        assert np.array_equal(mesh["built_vertices"], g["built_vertices"][v0:v1]) and mesh["settled"] == g["settled"][k]
+        # the sewing pattern: per-corner rest coordinates, panels, stitches and the design record
+        s0, s1 = g["stitch_start"][k:k + 2]
+        assert np.array_equal(mesh["rest_uv"], g["rest_uv"][f0:f1], equal_nan=True)
+        assert np.array_equal(mesh["panel"], g["panel"][v0:v1]) and np.array_equal(mesh["face_panel"],
+                                                                                     g["face_panel"][f0:f1])
+        assert np.array_equal(mesh["stitches"], g["stitches"][s0:s1])
+        if k == sl.PATTERN_GARMENT:
+            assert mesh["design"] == sl.design(k) and len(mesh["stitches"]) == 2
+            assert (mesh["panel"] >= 0).all() and np.isfinite(mesh["rest_uv"]).all()
+        else:  # a shell garment: no pattern, said the documented way
+            assert mesh["design"] is None and mesh["stitches"].shape == (0, 2)
+            assert (mesh["panel"] == -1).all() and (mesh["face_panel"] == -1).all() and np.isnan(mesh["rest_uv"]).all()
     assert store.names["failure_names"][1] == "nan" and store.names["split_names"] == ("train", "val", "test")
     assert set(ROOT_ATTRIBUTES) <= set(store.attrs) and store.attrs["units"]["vertex_frames/detail"] == "m"
 
@@ -264,7 +278,8 @@ def test_validate_finds_frames_that_are_not_their_motions(tmp_path):
                         "motion generator and the regressor would read different poses"]
 
 
-@pytest.mark.parametrize("version, why", [(3, "derives on read"), (4, "poses of passed samples only")])
+@pytest.mark.parametrize("version, why", [(3, "derives on read"), (4, "poses of passed samples only"),
+                                          (5, "builder's construction as the garment's rest shape")])
 def test_an_older_schema_is_refused_with_how_to_make_it_again(packed, tmp_path, version, why):
     """A schema-3 store (float positions and derived arrays stored) and a schema-4 store (no motion
     tables of poses) are refused by the reader, validate and info, each saying why and the command
@@ -279,7 +294,7 @@ def test_an_older_schema_is_refused_with_how_to_make_it_again(packed, tmp_path, 
     with pytest.raises(InputError) as exc:
         open_store(old)
     message = str(exc.value)
-    assert f"has schema version {version}; this drape reads version 5" in message and why in message
+    assert f"has schema version {version}; this drape reads version 6" in message and why in message
     assert f"drape info {old} --config > config.yaml && drape generate config.yaml --out NEW" in message
     assert validate(old) == [message]
     info = store_info(old)
@@ -343,7 +358,47 @@ def test_tensorstore_reads_every_array(packed):
     for path, spec in ARRAYS.items():
         arr = ts.open({"driver": "zarr3", "kvstore": {"driver": "file", "path": str(packed / path)}}).result()
         data = arr.read().result()
-        assert data.dtype == np.dtype(spec.dtype) and np.array_equal(data, expected[path]), path
+        assert data.dtype == np.dtype(spec.dtype) and np.array_equal(data, expected[path],
+                                                                     equal_nan=data.dtype.kind == "f"), path
+
+
+def test_zarr_reads_the_pattern_arrays_by_the_documented_layout(packed):
+    """Without drape: zarr-python opens the garments group and finds a garment's corner coordinates,
+    stitches and design record through the offsets docs/store.md describes."""
+    import zarr
+
+    root = zarr.open_group(str(packed), mode="r")
+    gs = root["garments"]
+    g = sl.PATTERN_GARMENT
+    f0, f1 = gs["face_start"][g:g + 2]
+    s0, s1 = gs["stitch_start"][g:g + 2]
+    d0, d1 = gs["design_start"][g:g + 2]
+    static = sl.static_groups()["garments"][0]
+    assert np.array_equal(gs["rest_uv"][f0:f1], static["rest_uv"][f0:f1])
+    assert gs["rest_uv"].attrs["unit"] == "m" and gs["rest_uv"].shape[1:] == (3, 2)
+    assert gs["stitches"][s0:s1].tolist() == static["stitches"][s0:s1].tolist()
+    assert json.loads(bytes(gs["design"][d0:d1]).decode("utf-8")) == sl.design(g)
+    assert gs["design_start"][0] == 0 and gs["design_start"][1] == 0  # instance 0 is a shell: no design bytes
+
+
+def test_validate_finds_a_shell_with_pattern_data_and_foreign_stitches(tmp_path):
+    """Staging refuses a garments group whose shell garment has corner coordinates, or whose
+    stitches leave their instance."""
+    from datagen.store import StoreWriter
+
+    arrays, names = sl.static_groups()["garments"]
+    writer = StoreWriter.open(tmp_path / "s", config=sl.CONFIG, seed=sl.SEED, sample_count=N, segment_length=2)
+    bad = dict(arrays, rest_uv=np.nan_to_num(arrays["rest_uv"]))
+    with pytest.raises(InputError, match="'rest_uv' must be NaN on the rows of shell garments"):
+        writer.stage_static("garments", bad, names=names)
+    st = arrays["stitches"].copy()
+    st[0, 1] = 99
+    with pytest.raises(InputError, match="'stitches' of instance 1 has vertex 99"):
+        writer.stage_static("garments", dict(arrays, stitches=st), names=names)
+    panel = arrays["panel"].copy()
+    panel[0] = 0
+    with pytest.raises(InputError, match="instance 0 is neither a pattern garment"):
+        writer.stage_static("garments", dict(arrays, panel=panel), names=names)
 
 
 def test_info_summarises_splits_sizes_failures(packed, tmp_path):
@@ -354,6 +409,16 @@ def test_info_summarises_splits_sizes_failures(packed, tmp_path):
     assert info["sizes"]["vertex_frames"]["on_disk"] > 0
     text = format_store_info(info)
     assert "train" in text and "nan" in text and "vertex_frames" in text
+    # the garments: types (0 tshirt, 1 skirt, 2 tshirt), instance 1 a sewing pattern, instance 2 not settled;
+    # every template lies 2 cm below its construction (stage_loop's built_vertices = rest_vertices + 0.02)
+    g = info["garments"]
+    assert (g["instances"], g["pattern"], g["shell"], g["settled"]) == (3, 1, 2, 2)
+    assert g["types"]["tshirt"]["instances"] == 2 and g["types"]["tshirt"]["settled"] == 1
+    assert g["types"]["skirt"]["pattern"] and not g["types"]["tshirt"]["pattern"]
+    assert g["types"]["skirt"]["template_dy_mm"] == pytest.approx(-20.0, abs=1e-3)
+    assert g["types"]["skirt"]["template_distance_mm"] == pytest.approx(20.0 * 3 ** 0.5, abs=1e-3)
+    assert "garments: 3 instances (2 shell, 1 sewing pattern), 2 settled at rest" in text
+    assert "vertical -20.0 mm" in text
     writer = sl.open_writer(tmp_path / "partial", N, durable=False)
     for i in range(3, 7):
         writer.stage_sample(i, *sl.sample(i))
@@ -502,7 +567,7 @@ def test_pack_refuses_missing_samples_and_rebuilds_after_interruption(tmp_path, 
     reference = tmp_path / "reference"
     build(reference)
     a, b = read_everything(path), read_everything(reference)
-    assert all(np.array_equal(a[p], b[p]) for p in ARRAYS)
+    assert all(np.array_equal(a[p], b[p], equal_nan=a[p].dtype.kind == "f") for p in ARRAYS)
 
 
 # --------------------------------------------------------------------------------- crash safety
@@ -558,7 +623,7 @@ def test_killed_staging_resumes_to_the_same_store(tmp_path):
     assert validate(store) == []
     a, b = read_everything(store), read_everything(reference)
     for p in ARRAYS:
-        assert a[p].shape == b[p].shape and np.array_equal(a[p], b[p]), p
+        assert a[p].shape == b[p].shape and np.array_equal(a[p], b[p], equal_nan=a[p].dtype.kind == "f"), p
     assert not (store / STAGING).exists()
     print(f"kills: {outcomes}, staged after each: {staged_counts}, half-written temporaries left: {partial_seen}")
 
@@ -583,7 +648,7 @@ def test_two_processes_staging_one_store_give_the_same_store(tmp_path, packed):
     assert validate(store) == []
     a, b = read_everything(store), read_everything(packed)
     for p in ARRAYS:
-        assert a[p].shape == b[p].shape and np.array_equal(a[p], b[p]), p
+        assert a[p].shape == b[p].shape and np.array_equal(a[p], b[p], equal_nan=a[p].dtype.kind == "f"), p
 
 
 # ----------------------------------------------------------------------------------- disk errors
