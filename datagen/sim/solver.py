@@ -1,7 +1,7 @@
 """The vertex block descent cloth solver: arranges the launches of :mod:`datagen.sim.kernels`.
 
 ``SolverVBD(model, config).step(state_in, state_out, control, dt)`` advances every scene of the
-model by ``dt`` (one frame) in ``config.steps.substeps`` substeps of ``config.steps.iterations`` colour sweeps,
+model by ``dt`` (one frame) in ``config.steps.substeps_for(dt)`` substeps of ``config.steps.iterations`` colour sweeps,
 with the body moving linearly from the previous control to ``control`` within the frame.
 """
 
@@ -300,6 +300,10 @@ class SolverVBD:
         self.body_sub.assign(control.body_vertices)
         self._refit_body()
 
+    def substeps_for(self, dt: float) -> int:
+        """Substeps a step of ``dt`` [s] runs (:meth:`StepConfig.substeps_for`)."""
+        return self.config.steps.substeps_for(dt)
+
     def _refit_body(self) -> None:
         """Refit every body mesh to ``body_sub`` (on CUDA spread over streams that wait for the
         current stream's work and that it waits for in turn: the refits are independent)."""
@@ -444,8 +448,9 @@ class SolverVBD:
         wp.launch(N.vertex_force_diagonal, n, inputs=[x, self.verts, self.membrane, self.bending, self.body_contact,
                                                       self.substep, self.cg_force, self.cg_diag_other])
         # x stays put while the iterations run: each element is linearised once, not once an iteration
+        majorise = int(c.steps.compression_hessian == "tension")
         wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
-                                                    self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
+                                                    majorise, self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
                                                     self.cg_face_scale])
         wp.launch(N.bending_linearise, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, self.cg_hinge_grad,
                                                    self.cg_hinge_scale])
@@ -501,19 +506,20 @@ class SolverVBD:
 
         K, m, c = self.K, self.model, self.config
         n, nb = m.particle_count, m.body_vertex_count
-        h = dt / c.steps.substeps
+        substeps = c.steps.substeps_for(dt)
+        h = dt / substeps
         self.substep.h, self.substep.eps_u = h, c.friction_velocity * h
         x, v = state.positions, state.velocities
         self.needed.zero_()
         self.projected.zero_()
         with wp.ScopedDevice(m.device):
-            for s in range(c.steps.substeps):
+            for s in range(substeps):
                 if c.self_contact.enabled and c.self_contact.untangle_step > 0.0:
                     # before the substep's solve, which relaxes the membrane around what it moved
                     # (after it, a 4-iteration jump was left in the frame: pants walk 53 % stretch)
                     self._untangle(x)
-                a1 = (s + 1) / c.steps.substeps
-                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / c.steps.substeps,
+                a1 = (s + 1) / substeps
+                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / substeps,
                                                           self.body_prev_sub])
                 wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1, self.body_sub])
                 self._refit_body()
