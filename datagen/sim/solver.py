@@ -58,6 +58,18 @@ REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
 
 
+def mesh_edge_length(host) -> float:
+    """The smallest of the scenes' median rest edge lengths [m] (0 for a model without edges): what
+    the substep length follows (``StepConfig.substep_edge``)."""
+    x = np.asarray(host.rest_positions, dtype=np.float64)
+    pairs = np.asarray(host.edge_pairs)
+    if len(pairs) == 0:
+        return 0.0
+    length = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
+    medians = [np.median(length[a:b]) for a, b in np.asarray(host.edge_range) if b > a]
+    return float(min(medians)) if medians else 0.0
+
+
 def refit_on_streams(meshes, streams, device) -> None:
     """Refit warp meshes (or BVHs), spread round ``streams`` that first wait for ``device``'s current
     stream and that it then waits for in turn (the refits are independent, so a captured CUDA
@@ -301,8 +313,12 @@ class SolverVBD:
         self._refit_body()
 
     def substeps_for(self, dt: float) -> int:
-        """Substeps a step of ``dt`` [s] runs (:meth:`StepConfig.substeps_for`)."""
-        return self.config.steps.substeps_for(dt)
+        """Substeps a step of ``dt`` [s] runs (:meth:`StepConfig.substeps_for` at the model's
+        :func:`mesh_edge_length`)."""
+        edge = getattr(self, "_mesh_edge", None)
+        if edge is None:
+            edge = self._mesh_edge = mesh_edge_length(self.model.host)
+        return self.config.steps.substeps_for(dt, edge)
 
     def _refit_body(self) -> None:
         """Refit every body mesh to ``body_sub`` (on CUDA spread over streams that wait for the
@@ -506,7 +522,7 @@ class SolverVBD:
 
         K, m, c = self.K, self.model, self.config
         n, nb = m.particle_count, m.body_vertex_count
-        substeps = c.steps.substeps_for(dt)
+        substeps = self.substeps_for(dt)
         h = dt / substeps
         self.substep.h, self.substep.eps_u = h, c.friction_velocity * h
         x, v = state.positions, state.velocities
