@@ -122,7 +122,7 @@ def test_the_contact_query_pushes_a_vertex_at_most_as_far_as_the_body_advanced(s
             solver.body_ids, model.body_face_base, model.body_face_part, model.body_face_border, pos,
             model.particle_scene, model.body_faces, prev, now, config.body_query, solver.body_radius, model.active, y,
             solver.body_has, solver.body_point, solver.body_normal, solver.body_disp, solver.vertex_order])
-        moved[rise] = pos.numpy().astype(np.float64) - cloth
+        moved[rise] = pos.numpy().astype(np.float64) - cloth.astype(np.float32).astype(np.float64)
     r = float(solver.body_radius.numpy()[0])
     print(f"\ncontact radius {r * 1e3:.2f} mm; pushed {moved[0.0][0, 1] * 1e3:.4f} mm (static), "
           f"{moved[0.0005][0, 1] * 1e3:.4f} mm (body rose 0.5 mm); edge normal {solver.body_normal.numpy()[1, 0]}")
