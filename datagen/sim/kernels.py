@@ -206,9 +206,10 @@ def set_body_plane(i: int, p: int, f: int, u: float, v: float, xi: wp.vec3, r: f
     the face's normal, whose plane extended past a sharp edge (a square rim, a low-poly collider)
     invented body up to r beyond it and pushed cloth out to that. Elsewhere the face's normal.
 
-    The push: a vertex closer than r (or less than 2r behind the plane) is moved out along the
-    normal by at most the body's own advance along it in this substep (the work of a moving body):
-    a static body pushes nothing, so the detection makes no energy; its penalty does the rest."""
+    Returns the push out along the normal when the vertex is closer than r (or less than 2r behind
+    the plane): to r from the closest feature, which at an edge is r from the real edge. (Pushing
+    only by the body's advance along the normal let a strip fall through the crease of two parts,
+    ``test_physics.test_cloth_in_the_crease_of_two_body_parts_is_held_by_both``.)"""
     pt, n, disp = body_surface_point(f, u, v, body_faces, body_prev, body_now)
     if wp.length(n) == 0.0:
         return wp.vec3(0.0)
@@ -224,7 +225,7 @@ def set_body_plane(i: int, p: int, f: int, u: float, v: float, xi: wp.vec3, r: f
     body_disp[i, p] = disp
     d = wp.dot(xi - pt, n)
     if d < r and d > -2.0 * r:
-        return n * wp.min(r - d, wp.max(wp.dot(disp, n), 0.0))
+        return n * (r - d)
     return wp.vec3(0.0)
 
 
@@ -259,9 +260,8 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
     tree is refitted each substep, not one per part.
 
     A vertex that the body's move has put closer than a plane's contact radius (or just behind
-    it: less than two radii) is first moved out along the normal by at most the body's advance
-    along it in the substep (the pushes of its planes added; :func:`set_body_plane`), with its
-    inertial target, so the body's push is never held back by the cloth's
+    it: less than two radii) is first moved out along the normal (the pushes of its planes
+    added; :func:`set_body_plane`), with its inertial target, so the body's push is never held back by the cloth's
     conservative move bound (which is measured from these positions). Thread t takes vertex
     ``order[t]``."""
     i = order[wp.tid()]

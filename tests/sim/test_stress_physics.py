@@ -110,12 +110,12 @@ def test_a_disc_dropped_on_a_square_rim_makes_no_energy(name, square_rim):
     assert r.rise.max() <= energy_tolerance(r.work)
 
 
-def test_the_contact_query_pushes_a_vertex_at_most_as_far_as_the_body_advanced(square_rim):
-    """``kernels.detect_body`` on the square-rimmed cylinder: a vertex 1 mm above its top (inside the
-    contact distance r) is not moved while the body is static, and moved up by the body's advance
-    (0.5 mm) when the body rose by that within the substep; a vertex beside the rim, whose closest
-    point is on the rim's edge, gets the edge's normal (from that point to the vertex), not the top
-    face's plane extended past the edge."""
+def test_the_contact_query_pushes_a_vertex_by_a_sharp_rim_to_r_from_the_real_edge(square_rim):
+    """``kernels.detect_body`` on the square-rimmed cylinder: a vertex 1 mm above its top is pushed
+    up to the contact distance r; a vertex 2 mm beside the rim and 1 mm above its top, whose closest
+    point is on the rim's edge, gets the edge's normal (from that point to the vertex) and is pushed
+    along it to r from the real edge, not to r above the top face's plane extended past the edge
+    (which moved it 2.5 mm up and held cloth off a rim that is not there)."""
     import warp as wp
 
     from datagen.sim import kernels as K
@@ -123,8 +123,7 @@ def test_the_contact_query_pushes_a_vertex_at_most_as_far_as_the_body_advanced(s
     from datagen.sim.state import BodyControl
 
     config = SolverConfig()
-    rim = 0.09 * np.cos(np.pi / 96)  # the 96-gon's edge midpoint radius
-    cloth = np.array([[0.0, 0.001, 0.0], [rim + 0.002, 0.001, 0.0], [0.0, 0.001, 0.02]])
+    cloth = np.array([[0.0, 0.001, 0.0], [0.09 + 0.002, 0.001, 0.0], [0.0, 0.001, 0.02]])
     b = ClothModelBuilder()
     b.add_cloth(cloth, np.array([[0, 1, 2]]), material_name="cotton")
     b.add_body(*square_rim)
@@ -132,25 +131,23 @@ def test_the_contact_query_pushes_a_vertex_at_most_as_far_as_the_body_advanced(s
     solver = SolverVBD(model, config)
     rest = model.host.body_rest.astype(np.float32)
     solver.place_body(BodyControl.from_numpy(model, rest))
-    moved = {}
-    for rise in (0.0, 0.0005):
-        prev = wp.array(rest - np.array([0.0, rise, 0.0], dtype=np.float32), dtype=wp.vec3)
-        now = wp.array(rest, dtype=wp.vec3)
-        pos = wp.array(cloth.astype(np.float32), dtype=wp.vec3)
-        y = wp.array(cloth.astype(np.float32), dtype=wp.vec3)
-        wp.launch(K.detect_body, 3, inputs=[
-            solver.body_ids, model.body_face_base, model.body_face_part, model.body_face_border, pos,
-            model.particle_scene, model.body_faces, prev, now, config.body_query, solver.body_radius, model.active, y,
-            solver.body_has, solver.body_point, solver.body_normal, solver.body_disp, solver.vertex_order])
-        moved[rise] = pos.numpy().astype(np.float64) - cloth.astype(np.float32).astype(np.float64)
+    body = wp.array(rest, dtype=wp.vec3)
+    pos = wp.array(cloth.astype(np.float32), dtype=wp.vec3)
+    y = wp.array(cloth.astype(np.float32), dtype=wp.vec3)
+    wp.launch(K.detect_body, 3, inputs=[
+        solver.body_ids, model.body_face_base, model.body_face_part, model.body_face_border, pos,
+        model.particle_scene, model.body_faces, body, body, config.body_query, solver.body_radius, model.active, y,
+        solver.body_has, solver.body_point, solver.body_normal, solver.body_disp, solver.vertex_order])
+    x = pos.numpy().astype(np.float64)
     r = float(solver.body_radius.numpy()[0])
-    print(f"\ncontact radius {r * 1e3:.2f} mm; pushed {moved[0.0][0, 1] * 1e3:.4f} mm (static), "
-          f"{moved[0.0005][0, 1] * 1e3:.4f} mm (body rose 0.5 mm); edge normal {solver.body_normal.numpy()[1, 0]}")
-    assert r > 0.001
-    assert np.abs(moved[0.0]).max() == 0.0
-    np.testing.assert_allclose(moved[0.0005][0], [0.0, 0.0005, 0.0], atol=2e-6)
     n = solver.body_normal.numpy()[1, 0].astype(np.float64)
     point = solver.body_point.numpy()[1, 0].astype(np.float64)
     away = cloth[1] - point
+    print(f"\ncontact radius {r * 1e3:.2f} mm; the vertex over the top now {x[0, 1] * 1e3:.4f} mm high; the vertex by "
+          f"the rim {np.linalg.norm(x[1] - point) * 1e3:.4f} mm from the edge ({x[1, 1] * 1e3:.4f} mm high), edge "
+          f"normal {n}")
+    np.testing.assert_allclose(x[0], [0.0, r, 0.0], atol=2e-6)
     np.testing.assert_allclose(n, away / np.linalg.norm(away), atol=1e-4)
-    assert n[0] > 0.5 and n[1] > 0.3  # between the top's +Y and the side's +X
+    assert n[0] > 0.5 and n[1] > 0.2  # between the top's +Y and the side's +X
+    assert abs(np.linalg.norm(x[1] - point) - r) < 2e-6  # r from the real edge
+    assert x[1, 1] < r - 0.0005  # not r above the extended top plane
