@@ -91,6 +91,9 @@ CASES: tuple[Case, ...] = (
          summary="drape's solver and Newton's VBD side by side on one scene: ms per frame, penetration, crossings"),
     Case(name="convergence", module="benchmarks.convergence",
          summary="hanging strip of every material: elongation against the static answer, oscillation, energy balance"),
+    Case(name="physics-limits", module="benchmarks.physics_limits",
+         summary="energy balance and statics outside the gentle cases: frame rates, release from strain, a square "
+                 "rim, edge lengths"),
     Case(name="cusick", module="benchmarks.cusick",
          summary="the Cusick drape test of every material: drape coefficient and nodes against published ranges"),
     Case(name="strain-regions", module="benchmarks.strain_regions", needs="sim run-scenes --out-dir output",

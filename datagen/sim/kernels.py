@@ -197,11 +197,28 @@ def set_body_plane(i: int, p: int, f: int, u: float, v: float, xi: wp.vec3, r: f
                    body_now: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32),
                    point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
                    body_disp: wp.array2d(dtype=wp.vec3)) -> wp.vec3:
-    """Store vertex i's contact plane with part p at barycentric (u, v) of body face f; returns
-    the push out along its normal when the vertex is closer than r (or less than 2r behind it)."""
+    """Store vertex i's contact plane with part p at barycentric (u, v) of body face f, the
+    vertex's closest point on that part; returns the push out along its normal.
+
+    The plane's normal is the closest feature's: where the closest point lies on an edge or a
+    corner of the face and the vertex is on the face's outer side, the unit vector from the closest
+    point to the vertex (the gradient of the distance to the body, continuous across the edge), not
+    the face's normal, whose plane extended past a sharp edge (a square rim, a low-poly collider)
+    invented body up to r beyond it and pushed cloth out to that. Elsewhere the face's normal.
+
+    Returns the push out along the normal when the vertex is closer than r (or less than 2r behind
+    the plane): to r from the closest feature, which at an edge is r from the real edge. (Pushing
+    only by the body's advance along the normal let a strip fall through the crease of two parts,
+    ``test_physics.test_cloth_in_the_crease_of_two_body_parts_is_held_by_both``.)"""
     pt, n, disp = body_surface_point(f, u, v, body_faces, body_prev, body_now)
     if wp.length(n) == 0.0:
         return wp.vec3(0.0)
+    eps = 1.0e-6
+    if u < eps or v < eps or 1.0 - u - v < eps:  # the closest point is on an edge or a corner
+        e = xi - pt
+        le = wp.length(e)
+        if le > 1.0e-9 and wp.dot(e, n) > 0.0:
+            n = e / le
     has[i, p] = 1
     point[i, p] = pt
     normal[i, p] = n
@@ -244,7 +261,7 @@ def detect_body(body_meshes: wp.array(dtype=wp.uint64), body_face_base: wp.array
 
     A vertex that the body's move has put closer than a plane's contact radius (or just behind
     it: less than two radii) is first moved out along the normal (the pushes of its planes
-    added), with its inertial target, so the body's push is never held back by the cloth's
+    added; :func:`set_body_plane`), with its inertial target, so the body's push is never held back by the cloth's
     conservative move bound (which is measured from these positions). Thread t takes vertex
     ``order[t]``."""
     i = order[wp.tid()]

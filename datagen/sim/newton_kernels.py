@@ -159,14 +159,22 @@ def _membrane_frame(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32
 
 
 @wp.func
-def _membrane_law(f0: wp.vec3, f1: wp.vec3, law: vec5):
-    """The stiffnesses (k_u, k_v, k_uv, k_s) at this deformation (the buckling branch applied) and
-    the PSD-projected 2nd Piola stress."""
+def _membrane_law(f0: wp.vec3, f1: wp.vec3, law: vec5, majorise: int):
+    """The stiffnesses (k_u, k_v, k_uv, k_s) the Hessian uses at this deformation and the
+    PSD-projected 2nd Piola stress (always the buckling branch's, the true stress).
+
+    ``majorise`` 0: the Hessian's stiffnesses are the branch's at x (a compressed direction's x r);
+    1: the tension branch's, the larger curvature of the two, so that the quadratic model bounds the
+    membrane's energy in G from above on both branches and a step from compression into tension
+    cannot overshoot (the model under-estimated the curvature there by 1/r = 10x)."""
     g00 = 0.5 * (wp.dot(f0, f0) - 1.0)
     g11 = 0.5 * (wp.dot(f1, f1) - 1.0)
     g01 = 0.5 * wp.dot(f0, f1)
     k = buckled_stiffness(law, g00, g11)
-    return k, _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
+    S = _psd_stress(k[0] * g00 + k[2] * g11, 2.0 * k[3] * g01, k[1] * g11 + k[2] * g00)
+    if majorise != 0:
+        k = wp.vec4(law[0], law[1], law[2], law[3])
+    return k, S
 
 
 @wp.kernel
@@ -210,7 +218,7 @@ def element_diagonal(dm_inv: wp.array(dtype=wp.mat22), frame: wp.array2d(dtype=w
 @wp.kernel
 def membrane_linearise(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
                        tri_area: wp.array(dtype=float), tri_stiff: wp.array(dtype=vec5),
-                       damping: wp.array(dtype=float), h: float, frame: wp.array2d(dtype=wp.vec3),
+                       damping: wp.array(dtype=float), h: float, majorise: int, frame: wp.array2d(dtype=wp.vec3),
                        law: wp.array(dtype=wp.vec4), stress: wp.array(dtype=wp.mat22), scale: wp.array(dtype=float)):
     """What :func:`membrane_product` needs of each triangle at the step's linearisation point x,
     computed once a global step instead of once a conjugate-gradient iteration (x does not move
@@ -219,7 +227,7 @@ def membrane_linearise(x: wp.array(dtype=wp.vec3), faces: wp.array2d(dtype=wp.in
     f = wp.tid()
     D = dm_inv[f]
     f0, f1 = _membrane_frame(x, faces, D, f)
-    k, S = _membrane_law(f0, f1, tri_stiff[f])
+    k, S = _membrane_law(f0, f1, tri_stiff[f], majorise)
     frame[f, 0] = f0
     frame[f, 1] = f1
     law[f] = k

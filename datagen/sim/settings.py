@@ -60,11 +60,29 @@ class StepConfig:
     """How a frame is integrated: substeps, the global step and the colour sweeps.
 
     Attributes:
-        substeps: substeps per step (frame), 1-200.
+        substeps: the fewest substeps per step (frame), 1-200.
+        max_substep: the longest substep [s], in (0, 0.1]: a step of dt has
+            :meth:`substeps_for` (dt) = max(``substeps``, ⌈dt / ``max_substep``⌉) substeps, so the
+            substep follows the frame time and not the frame count (the default, 1/300 s, is the
+            production 10 substeps of a 30 fps frame; at 15 fps a frame gets 20). The solver holds
+            its energy balance and statics up to this substep length with the default sweeps and
+            CG iterations (``docs/simulator.md``, physics limits); at 1/150 s (15 fps with a fixed 10)
+            the woven presets make energy and polyester hangs 37 % long.
+        substep_edge: the mesh edge length [m] that ``max_substep`` is measured at, >= 0 (0: off): a
+            finer mesh (the smallest of the scenes' median rest edge lengths) takes substeps shorter
+            in proportion, since the stiffness against a vertex's mass grows as 1/edge² and the same
+            sweeps and CG iterations then converge alike (denim's Cusick fall at 1 cm edges made
+            energy at 10 substeps, none at 15; at 13 still 1.5e-3 of gravity's work). The default,
+            1.5 cm, is the edge length the presets and the Cusick test are fitted at; of the garment
+            types' default meshes only the skirt's (1.3 cm) gets more (12 at 30 fps).
         iterations: colour sweeps per substep, 1-200.
         global_iterations: conjugate-gradient iterations of the global Newton step that starts every
             substep (:mod:`datagen.sim.newton_kernels`), 0-1000; 0: off, the sweeps alone (which
             carry a load one vertex per sweep: woven cloth needs it carried across the garment at once).
+        compression_hessian: the stiffness the global step's Hessian gives a direction in
+            compression: ``buckled`` (the buckling branch's, r x the tension stiffness, the
+            curvature at x) or ``tension`` (the tension branch's, which bounds the membrane's
+            energy in the Green strain from above on both branches; ``newton_kernels._membrane_law``).
         chebyshev_rho: spectral radius estimate for the Chebyshev acceleration of the sweeps, in
             [0, 1); 0: off.
         chebyshev_contacts: whether the acceleration also extrapolates vertices that have cloth-cloth
@@ -78,8 +96,11 @@ class StepConfig:
     """
 
     substeps: int = _limit(10, min=1, max=200)
+    max_substep: float = _limit(1.0 / 300.0, "s", above=0.0, max=0.1)
+    substep_edge: float = _limit(0.015, "m", min=0.0)
     iterations: int = _limit(20, min=1, max=200)
     global_iterations: int = _limit(20, min=0, max=1000)
+    compression_hessian: str = field(default="buckled", metadata={"choices": ("buckled", "tension")})
     chebyshev_rho: float = _limit(0.7, min=0.0, below=1.0)
     chebyshev_contacts: bool = True
     chebyshev_body_contacts: bool = True
@@ -87,6 +108,15 @@ class StepConfig:
 
     def __post_init__(self):
         check_limits(self)
+
+    def substeps_for(self, dt: float, edge: float = 0.0) -> int:
+        """Substeps of a step of ``dt`` [s] on a mesh of edge length ``edge`` [m] (0: not known):
+        max(``substeps``, ⌈dt / (``max_substep`` x min(1, edge / ``substep_edge``))⌉), with a
+        relative 1e-6 of slack, so that 1/30 s at 1/300 s is 10, not 11 by rounding."""
+        longest = self.max_substep
+        if edge > 0.0 and self.substep_edge > 0.0:
+            longest *= min(1.0, edge / self.substep_edge)
+        return max(int(self.substeps), int(math.ceil(dt / longest * (1.0 - 1e-6))))
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -234,7 +264,8 @@ class LaunchConfig:
 
 
 FLAT_NAMES = {
-    "substeps": "steps.substeps", "iterations": "steps.iterations", "global_iterations": "steps.global_iterations",
+    "substeps": "steps.substeps", "max_substep": "steps.max_substep", "substep_edge": "steps.substep_edge", "iterations": "steps.iterations", "global_iterations": "steps.global_iterations",
+    "compression_hessian": "steps.compression_hessian",
     "chebyshev_rho": "steps.chebyshev_rho", "chebyshev_contacts": "steps.chebyshev_contacts",
     "chebyshev_body_contacts": "steps.chebyshev_body_contacts", "colour_hinge_wings": "steps.colour_hinge_wings",
     "body_stiffness": "body.stiffness", "body_margin": "body.margin", "body_query": "body.query",

@@ -1,7 +1,7 @@
 """The vertex block descent cloth solver: arranges the launches of :mod:`datagen.sim.kernels`.
 
 ``SolverVBD(model, config).step(state_in, state_out, control, dt)`` advances every scene of the
-model by ``dt`` (one frame) in ``config.steps.substeps`` substeps of ``config.steps.iterations`` colour sweeps,
+model by ``dt`` (one frame) in ``config.steps.substeps_for(dt)`` substeps of ``config.steps.iterations`` colour sweeps,
 with the body moving linearly from the previous control to ``control`` within the frame.
 """
 
@@ -56,6 +56,18 @@ def _reference_vertices(body_rest: np.ndarray, ranges: np.ndarray, scene_count: 
 
 REFIT_STREAMS = 16
 """CUDA streams that the body meshes' refits are spread over."""
+
+
+def mesh_edge_length(host) -> float:
+    """The smallest of the scenes' median rest edge lengths [m] (0 for a model without edges): what
+    the substep length follows (``StepConfig.substep_edge``)."""
+    x = np.asarray(host.rest_positions, dtype=np.float64)
+    pairs = np.asarray(host.edge_pairs)
+    if len(pairs) == 0:
+        return 0.0
+    length = np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1)
+    medians = [np.median(length[a:b]) for a, b in np.asarray(host.edge_range) if b > a]
+    return float(min(medians)) if medians else 0.0
 
 
 def refit_on_streams(meshes, streams, device) -> None:
@@ -300,6 +312,14 @@ class SolverVBD:
         self.body_sub.assign(control.body_vertices)
         self._refit_body()
 
+    def substeps_for(self, dt: float) -> int:
+        """Substeps a step of ``dt`` [s] runs (:meth:`StepConfig.substeps_for` at the model's
+        :func:`mesh_edge_length`)."""
+        edge = getattr(self, "_mesh_edge", None)
+        if edge is None:
+            edge = self._mesh_edge = mesh_edge_length(self.model.host)
+        return self.config.steps.substeps_for(dt, edge)
+
     def _refit_body(self) -> None:
         """Refit every body mesh to ``body_sub`` (on CUDA spread over streams that wait for the
         current stream's work and that it waits for in turn: the refits are independent)."""
@@ -444,8 +464,9 @@ class SolverVBD:
         wp.launch(N.vertex_force_diagonal, n, inputs=[x, self.verts, self.membrane, self.bending, self.body_contact,
                                                       self.substep, self.cg_force, self.cg_diag_other])
         # x stays put while the iterations run: each element is linearised once, not once an iteration
+        majorise = int(c.steps.compression_hessian == "tension")
         wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
-                                                    self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
+                                                    majorise, self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
                                                     self.cg_face_scale])
         wp.launch(N.bending_linearise, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, self.cg_hinge_grad,
                                                    self.cg_hinge_scale])
@@ -501,19 +522,20 @@ class SolverVBD:
 
         K, m, c = self.K, self.model, self.config
         n, nb = m.particle_count, m.body_vertex_count
-        h = dt / c.steps.substeps
+        substeps = self.substeps_for(dt)
+        h = dt / substeps
         self.substep.h, self.substep.eps_u = h, c.friction_velocity * h
         x, v = state.positions, state.velocities
         self.needed.zero_()
         self.projected.zero_()
         with wp.ScopedDevice(m.device):
-            for s in range(c.steps.substeps):
+            for s in range(substeps):
                 if c.self_contact.enabled and c.self_contact.untangle_step > 0.0:
                     # before the substep's solve, which relaxes the membrane around what it moved
                     # (after it, a 4-iteration jump was left in the frame: pants walk 53 % stretch)
                     self._untangle(x)
-                a1 = (s + 1) / c.steps.substeps
-                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / c.steps.substeps,
+                a1 = (s + 1) / substeps
+                wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, s / substeps,
                                                           self.body_prev_sub])
                 wp.launch(K.interpolate_body, nb, inputs=[self.body_start, control.body_vertices, a1, self.body_sub])
                 self._refit_body()
