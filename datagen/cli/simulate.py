@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from datagen.errors import InputError
+from datagen.geometry.topology import unique_edges
 
 
 def register(sub, formatter) -> None:
@@ -62,8 +63,11 @@ def _cmd_simulate(args) -> int:
                                            self_contact=SelfContactConfig(enabled=not args.no_self_collision)))
     motion = make_motion(args.motion, seed=args.motion_seed, frames=config.motion_frames(args.frames, args.fps),
                          fps=args.fps)
+    edges = unique_edges(garment.faces)
+    edge = float(np.median(np.linalg.norm(garment.vertices[edges[:, 0]] - garment.vertices[edges[:, 1]], axis=1)))
+    substeps = config.solver.steps.substeps_for(1.0 / args.fps, edge)  # what the solver runs per frame
     print(f"{args.garment} ({garment.vertex_count} vertices, {garment.material.name}) on {args.body}, "
-          f"{args.motion} {args.frames} frames at {args.fps:g} fps, {config.solver.steps.substeps} substeps x "
+          f"{args.motion} {args.frames} frames at {args.fps:g} fps, {substeps} substeps x "
           f"{config.solver.steps.iterations} "
           f"iterations, self-collision {'off' if args.no_self_collision else 'on'}, device {device}", flush=True)
     t0 = time.perf_counter()
