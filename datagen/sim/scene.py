@@ -140,6 +140,10 @@ class SceneResult:
         failure: why the scene failed, or None.
         failure_frame: the frame (index into ``metrics``) where it first failed, or -1.
         seconds: wall time of the batch this scene was in.
+        settled: the garment at the end of the settle phase at rest, before the lead-in [m] (the body
+            in its rest pose at the motion's first translation, as ``SceneArrays.garment_vertices``),
+            [V, 3] float32 (its template: the drape at rest on this body; for a sewn pattern
+            garment, the sewn and settled cloth).
     """
 
     positions: np.ndarray
@@ -154,6 +158,7 @@ class SceneResult:
     failure: Failure | None
     failure_frame: int
     seconds: float
+    settled: np.ndarray | None = None
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The result as named arrays (what :meth:`save` writes): ``garment_vertices``,
@@ -212,6 +217,9 @@ class SceneArrays:
             None: the body is one part).
         poses: the pose of every body frame [N, 24, 3] (rad, axis-angle), or None.
         trans: the root translation of every body frame [N, 3] (m), or None.
+        rest_corners: the flat rest state of a sewn pattern garment: every face corner's 2D panel
+            coordinate in its (weft, warp) frame [F, 3, 2] (m) (:func:`datagen.sim.sewing.rest_corners`);
+            None: the garment rests as built (a shell).
     """
 
     garment_vertices: np.ndarray
@@ -226,6 +234,7 @@ class SceneArrays:
     body_face_part: np.ndarray | None = None
     poses: np.ndarray | None = None
     trans: np.ndarray | None = None
+    rest_corners: np.ndarray | None = None
 
     def __post_init__(self):
         if not isinstance(self.material, Material):
@@ -277,7 +286,15 @@ def scene_arrays(scene: Scene, lead_in: float, posed: tuple | None = None) -> Sc
     s = scene
     motion, lead, verts, shift, parts = posed if posed is not None else _posed_body(s, lead_in)
     g = s.garment
-    return SceneArrays(garment_vertices=g.vertices + shift, garment_faces=np.asarray(g.faces),
+    corners = None
+    if getattr(g, "kind", "shell") == "pattern":
+        from datagen.sim.sewing import rest_corners
+
+        if g.stitch_pairs is not None and len(g.stitch_pairs):
+            raise InputError("a pattern garment must be sewn before it is simulated: datagen.sim.sewing.sew(garment, "
+                             "body_vertices, body_faces) gives the welded garment (`drape simulate --pattern` does it)")
+        corners = rest_corners(g)
+    return SceneArrays(garment_vertices=g.vertices + shift, garment_faces=np.asarray(g.faces), rest_corners=corners,
                        material=g.material, material_frames=g.material_frames(), weft_scale=g.weft_rest_scale(),
                        body_frames=verts, body_faces=np.asarray(s.body.faces),
                        fps=float(s.motion.fps), lead_frames=lead, body_face_part=parts,
@@ -369,7 +386,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     body_frames = []
     for k, a in enumerate(arrays):
         builder.add_cloth(a.garment_vertices, a.garment_faces, material_name=a.material, scene=k,
-                          material_frames=a.material_frames, weft_scale=a.weft_scale)
+                          material_frames=a.material_frames, weft_scale=a.weft_scale, rest_corners=a.rest_corners)
         builder.add_body(a.body_frames[0], a.body_faces, scene=k, face_part=a.body_face_part)
         body_frames.append(a.body_frames)
     lead = arrays[0].lead_frames
@@ -401,6 +418,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     failure: list[Failure | None] = [None] * len(scenes)
     failure_frame = [-1] * len(scenes)
     positions = []
+    settled = None
     start = time.perf_counter()
     dt = 1.0 / fps
 
@@ -431,6 +449,8 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                         log.warning("scene %d failed at frame %d: %s", s, f, why)
                         if config.freeze_failed:
                             solver.freeze(state_a, s)
+            if f == config.settle_rest - 1:
+                settled = state_a.positions.numpy().copy()
             if f >= recorded_from:
                 positions.append(state_a.positions.numpy().copy())  # on the CPU .numpy() is a view of the buffer
             frame_seconds.append(time.perf_counter() - t_frame)
@@ -457,5 +477,6 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
                                trans=None if a.trans is None else np.asarray(a.trans[rec]), fps=fps,
                                recorded_from=recorded_from, motion_from=motion_from,
                                metrics={k: np.array([v[s] for v in series[k]]) for k in METRIC_NAMES},
-                               failure=failure[s], failure_frame=failure_frame[s], seconds=seconds))
+                               failure=failure[s], failure_frame=failure_frame[s], seconds=seconds,
+                               settled=None if settled is None else settled[sel]))
     return out

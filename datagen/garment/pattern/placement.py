@@ -26,7 +26,7 @@ import numpy as np
 from datagen.errors import InputError
 from datagen.garment.pattern.mesh import FlatPatternMesh
 
-__all__ = ["CLEARANCE", "PlacementReport", "place", "placement_report"]
+__all__ = ["CLEARANCE", "PlacementReport", "place", "placement_report", "push_out"]
 
 log = logging.getLogger(__name__)
 
@@ -79,7 +79,7 @@ def _wrap(mesh: FlatPatternMesh, body_vertices: np.ndarray) -> np.ndarray:
     return out
 
 
-def _push_out(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray, clearance: float) -> np.ndarray:
+def push_out(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray, clearance: float) -> np.ndarray:
     from datagen.geometry.queries import mesh_closest_points, mesh_signed_distance, warp_mesh
 
     body = warp_mesh(body_vertices, body_faces)
@@ -123,7 +123,7 @@ def place(mesh: FlatPatternMesh, body_vertices: np.ndarray, body_faces: np.ndarr
         raise InputError(f"placement mode must be 'flat' or 'wrap', got {mode!r}")
     # two passes: a vertex pushed onto another part of the body (an arm) is pushed again
     for _ in range(2 if push else 0):
-        pts = _push_out(pts, bv, bf, clearance)
+        pts = push_out(pts, bv, bf, clearance)
     return pts
 
 
