@@ -36,6 +36,7 @@ from datagen.sim.interface import SOLVERS, make_solver, solver_class
 from datagen.sim.metrics import METRIC_NAMES, Failure, FailureThresholds, Metrics
 from datagen.sim.model import ClothModelBuilder
 from datagen.sim.settings import SolverConfig
+from datagen.sim.sewing import SewConfig
 from datagen.sim.state import BodyControl, ClothState
 
 log = logging.getLogger(__name__)
@@ -53,6 +54,8 @@ class RunConfig:
         solver_name: which solver of :data:`datagen.sim.interface.SOLVERS` runs the scenes.
         solver: the solver's settings.
         thresholds: what makes a scene fail.
+        sewing: how a pattern garment is sewn and settled on the body at rest before its scene
+            (:func:`datagen.sim.sewing.sew`, with this run's solver settings and thresholds).
         freeze_failed: stop simulating a scene from the frame it fails (its vertices held where they
             are): a failed scene's frames are not stored, and a tangled scene is the most expensive
             kind. Its later metrics then describe the frozen cloth; its failure and failure frame do
@@ -67,6 +70,7 @@ class RunConfig:
     solver_name: str = field(default="vbd", metadata={"choices": tuple(SOLVERS)})
     solver: SolverConfig = field(default_factory=SolverConfig)
     thresholds: FailureThresholds = field(default_factory=FailureThresholds)
+    sewing: SewConfig = field(default_factory=SewConfig)
     freeze_failed: bool = True
 
     def __post_init__(self):
@@ -92,12 +96,15 @@ class RunConfig:
         first = self.ramp_frames(fps)[1]
         return slice(first, first + int(recorded))
 
-    def phases(self, recorded: int, fps: float) -> dict[str, int]:
+    def phases(self, recorded: int, fps: float, *, sewn: bool = False) -> dict[str, int]:
         """Simulated frames of each phase of a scene recording ``recorded`` frames (as
         :func:`frame_schedule` runs them): ``settle_rest``, ``lead_in``, ``settle_pose``, ``ramp``
-        (its last frame is the first recorded one, so not counted here) and ``recorded``."""
+        (its last frame is the first recorded one, so not counted here) and ``recorded``; with
+        ``sewn`` (a pattern garment) first ``sewing``: the most frames :func:`datagen.sim.sewing.sew`
+        runs (sewing, relaxing, settling until static; it stops each stage early when done)."""
         ramp, _ = self.ramp_frames(fps)
-        return {"settle_rest": self.settle_rest, "lead_in": int(round(self.lead_in * fps)),
+        first = {"sewing": self.sewing.most_frames()} if sewn else {}
+        return first | {"settle_rest": self.settle_rest, "lead_in": int(round(self.lead_in * fps)),
                 "settle_pose": self.settle_pose, "ramp": max(ramp - 1, 0), "recorded": int(recorded)}
 
     def as_dict(self) -> dict:
@@ -164,12 +171,14 @@ class SceneResult:
         """The result as named arrays (what :meth:`save` writes): ``garment_vertices``,
         ``garment_faces``, ``body_vertices``, ``fps``, ``pose``/``trans`` when known, the run's
         ``recorded_from``, ``motion_from``, ``failure`` (code, empty when none), ``failure_message``,
-        ``failure_frame`` and ``metric_<name>`` per simulated frame."""
+        ``failure_frame``, ``metric_<name>`` per simulated frame and ``settled`` when known."""
         out = {"garment_vertices": self.positions, "garment_faces": self.faces, "body_vertices": self.body_vertices,
                "fps": np.float64(self.fps), "recorded_from": self.recorded_from, "motion_from": self.motion_from,
                "failure": "" if self.failure is None else self.failure.code,
                "failure_message": "" if self.failure is None else self.failure.message,
                "failure_frame": self.failure_frame, **{f"metric_{k}": v for k, v in self.metrics.items()}}
+        if self.settled is not None:
+            out["settled"] = self.settled
         if self.poses is not None:
             out.update(pose=self.poses.astype(np.float32), trans=self.trans.astype(np.float32))
         return out

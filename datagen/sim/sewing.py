@@ -63,8 +63,9 @@ class SewConfig:
         static_speed: the largest vertex speed [m/s] of a static garment.
         static_frames: frames in a row the garment must be static to end the settling.
         gravity_scale: gravity while sewing, as a share of the solver's [-] (0: none).
-        solver: the solver's settings (gravity of the settling stage).
-        thresholds: the gates a sewn garment must pass (penetration, self-intersection, stretch).
+
+    The solver's settings and the gates are the run's (:func:`sew`'s ``solver`` and ``thresholds``;
+    :class:`~datagen.sim.scene.RunConfig` holds this as ``sewing`` beside them).
     """
 
     method: Literal["stitch", "weld"] = "stitch"
@@ -77,8 +78,6 @@ class SewConfig:
     static_speed: float = field(default=0.02, metadata={"min": 0.0})
     static_frames: int = field(default=5, metadata={"min": 1})
     gravity_scale: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0})
-    solver: SolverConfig = field(default_factory=SolverConfig)
-    thresholds: FailureThresholds = field(default_factory=FailureThresholds)
 
     def __post_init__(self):
         if self.method not in ("stitch", "weld"):
@@ -268,10 +267,14 @@ class _Run:
 
 
 def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face_part: np.ndarray | None = None,
-        config: SewConfig = SewConfig(), device: str | None = None) -> SewResult:
+        config: SewConfig = SewConfig(), solver: SolverConfig | None = None,
+        thresholds: FailureThresholds | None = None, device: str | None = None) -> SewResult:
     """Sew the pattern ``garment`` (placed around the body, not welded) on the body at rest
     (``body_vertices`` [B, 3] [m], ``body_faces`` [Fb, 3], its parts ``body_face_part`` [Fb]), then
-    settle it under gravity until static; see the module doc. A garment that cannot be sewn comes
+    settle it under gravity until static; see the module doc. ``solver``: the solver's settings
+    (default: the production ones; gravity is that of the settling, scaled by
+    ``config.gravity_scale`` while sewing); ``thresholds``: the gates of the sewn garment
+    (penetration share, self-intersections, stretch; default: the scenes'). A garment that cannot be sewn comes
     back with ``failure`` set (code ``seam``), never an exception."""
     if getattr(garment, "kind", None) != "pattern":
         raise InputError("sew() sews a garment of the pattern kind (`drape garment make --pattern NAME`)")
@@ -279,8 +282,10 @@ def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face
     if not len(pairs):
         raise InputError("the garment has no stitches to sew (already welded?)")
     t0 = time.perf_counter()
+    solver = SolverConfig() if solver is None else solver
+    thresholds = FailureThresholds() if thresholds is None else thresholds
     dt = 1.0 / config.fps
-    sew_cfg = dataclasses.replace(config.solver, gravity=tuple(config.gravity_scale * g for g in config.solver.gravity))
+    sew_cfg = dataclasses.replace(solver, gravity=tuple(config.gravity_scale * g for g in solver.gravity))
     weld = stitch_groups(garment.vertex_count, pairs)
     n_groups = int(weld.max()) + 1
     member_count = np.bincount(weld, minlength=n_groups)
@@ -344,7 +349,7 @@ def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face
         sewn_frames = 0
         relax = config.sew_frames  # the membrane closes the welded seams' stretch: until it is under the gate
     xw = welded.vertices
-    limit = min(config.thresholds.stretch, float(garment.material.max_strain))
+    limit = min(thresholds.stretch, float(garment.material.max_strain))
     for f in range(relax):
         xw = run.step(dt, series)
         gaps.append(0.0)
@@ -358,10 +363,10 @@ def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face
                                                  f"stretch {series['seam_stretch'][-1]:.0%}, largest speed "
                                                  f"{series['speed'][-1]:.2f} m/s)")
     sewn = xw.copy()
-    failure = failure or _gate(series, welded.vertex_count, config.thresholds, limit, "after sewing")
+    failure = failure or _gate(series, welded.vertex_count, thresholds, limit, "after sewing")
     settle_frames = -1
     if failure is None and config.settle_frames:
-        run2 = _Run(model, config.solver, body_vertices, wseam)
+        run2 = _Run(model, solver, body_vertices, wseam)
         run2.set_positions(xw)
         calm = 0
         for f in range(config.settle_frames):
@@ -370,7 +375,7 @@ def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face
             if calm >= config.static_frames:
                 settle_frames = f + 1
                 break
-        failure = _gate(series, welded.vertex_count, config.thresholds, limit, "after settling")
+        failure = _gate(series, welded.vertex_count, thresholds, limit, "after settling")
     out = dataclasses.replace(welded, vertices=np.asarray(xw, dtype=np.float64))
     res = SewResult(garment=out, weld=weld_map, stitch_pairs=pairs, placed=np.asarray(garment.vertices), sewn=sewn,
                     gap=np.asarray(gaps), **{k: np.asarray(v) for k, v in series.items()}, sew_frames=sewn_frames,
