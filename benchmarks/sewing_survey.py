@@ -9,8 +9,8 @@ garment (frames to sew, largest stretch next to the seams and crossings when sew
 static, failure) and the totals: sewn, settled, passed the gates, the causes of failures, seconds
 per garment.
 
-    python -m benchmarks sewing-survey [--designs 9] [--bodies regular] [--edge-length 0.03] [--settle-frames 30]
-        [--method stitch|weld] [--json out.json]
+    python -m benchmarks sewing-survey [--designs 9] [--bodies regular] [--placement flat|wrap] [--edge-length 0.03]
+        [--settle-frames 30] [--method stitch|weld] [--json out.json]
 """
 
 from __future__ import annotations
@@ -31,6 +31,7 @@ def main(argv=None) -> int:
     ap.add_argument("--designs", type=int, default=9, help="random designs (programs in turn), each on every body")
     ap.add_argument("--bodies", default=",".join(PRESET_BODIES), help="comma-separated body presets")
     ap.add_argument("--seed", type=int, default=0, help="draws the designs")
+    ap.add_argument("--placement", default="flat", choices=("flat", "wrap"), help="pattern_garment's placement mode")
     ap.add_argument("--edge-length", type=float, default=0.03, help="target edge length of the flat mesh [m]")
     ap.add_argument("--method", default="stitch", choices=("stitch", "weld"))
     ap.add_argument("--sew-frames", type=int, default=60)
@@ -66,7 +67,8 @@ def main(argv=None) -> int:
             row = {"program": prog, "seed": seed, "body": b}
             t0 = time.perf_counter()
             try:
-                g = pattern_garment(make_pattern(prog, seed, meas), bv, bf, edge_length=args.edge_length, seed=seed,
+                g = pattern_garment(make_pattern(prog, seed, meas), bv, bf, edge_length=args.edge_length,
+                                    mode=args.placement, seed=seed,
                                     betas=betas)
                 r = sew(g, bv, bf, body_face_part=parts, config=cfg)
             except DrapeError as exc:

@@ -115,7 +115,7 @@ def _sewn_pattern(spec: str, model, betas, config, device):
     from datagen.body.skeleton import face_parts
     from datagen.garment.pattern.garment import pattern_garment
     from datagen.garment.pattern.programs import make_pattern
-    from datagen.sim.sewing import sew
+    from datagen.sim.sewing import PLACEMENT, sew
 
     name, _, seed = spec.partition(":")
     try:
@@ -124,7 +124,7 @@ def _sewn_pattern(spec: str, model, betas, config, device):
         raise InputError(f"--pattern takes NAME[:SEED] with an integer seed, got {spec!r}") from None
     rest = np.asarray(model.shaped(betas))[0]
     placed = pattern_garment(make_pattern(name, seed, measure_body(model, betas)), rest, np.asarray(model.faces),
-                             seed=seed, betas=betas)
+                             mode=PLACEMENT, seed=seed, betas=betas)
     print(f"pattern {name}:{seed}: {placed.vertex_count} vertices in {len(placed.region_names)} panels, "
           f"{len(placed.stitch_pairs)} stitched pairs; sewing on the body at rest", flush=True)
     r = sew(placed, rest, np.asarray(model.faces), body_face_part=face_parts(model.weights, model.faces),
