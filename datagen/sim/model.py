@@ -594,8 +594,8 @@ def _bending(X: np.ndarray, E: np.ndarray, mats: list, vertex_material: np.ndarr
 def _flat_hinges(g: _Gathered, hinges: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """For interior hinges [H, 4]: whether a face on either side has a flat rest state [H], the
     edge's 2D rest length [m] [H] (the mean of its two faces' lengths where both are flat: a seam
-    joins two panels' edges, equal to their ease) and the mean 2D area of the two faces [m²] [H]
-    (a shell face on one side: its built area)."""
+    joins two panels' edges, equal to their ease) and the sum of the two faces' 2D areas [m²] [H]
+    (a shell face on one side: its built area), as the built shape's Ā₁+Ā₂."""
     F = g.F
     he = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     face = np.tile(np.arange(len(F)), 3)
@@ -616,7 +616,7 @@ def _flat_hinges(g: _Gathered, hinges: np.ndarray) -> tuple[np.ndarray, np.ndarr
     flat = g.flat[fa] | g.flat[fb]
     wa, wb = g.flat[fa].astype(float), g.flat[fb].astype(float)
     length = (wa * he_len[a] + wb * he_len[b]) / np.maximum(wa + wb, 1.0)
-    return flat, length, 0.5 * (face_area[fa] + face_area[fb])
+    return flat, length, face_area[fa] + face_area[fb]
 
 
 def _bounds(scene_of: np.ndarray, scene_count: int) -> np.ndarray:
