@@ -293,7 +293,6 @@ def scene_arrays(scene: Scene, lead_in: float, posed: tuple | None = None) -> Sc
     """Pose the scene's body over its motion with a lead-in of ``lead_in`` seconds from the rest pose
     (``posed``: :func:`_posed_body`'s result for it, when already made)."""
     s = scene
-    motion, lead, verts, shift, parts = posed if posed is not None else _posed_body(s, lead_in)
     g = s.garment
     corners = None
     if getattr(g, "kind", "shell") == "pattern":
@@ -303,6 +302,7 @@ def scene_arrays(scene: Scene, lead_in: float, posed: tuple | None = None) -> Sc
             raise InputError("a pattern garment must be sewn before it is simulated: datagen.sim.sewing.sew(garment, "
                              "body_vertices, body_faces) gives the welded garment (`drape simulate --pattern` does it)")
         corners = rest_corners(g)
+    motion, lead, verts, shift, parts = posed if posed is not None else _posed_body(s, lead_in)
     return SceneArrays(garment_vertices=g.vertices + shift, garment_faces=np.asarray(g.faces), rest_corners=corners,
                        material=g.material, material_frames=g.material_frames(), weft_scale=g.weft_rest_scale(),
                        body_frames=verts, body_faces=np.asarray(s.body.faces),

@@ -94,3 +94,36 @@ def test_sew_refuses_a_shell_or_a_sewn_garment():
         sew(w, bv, bf)
     with pytest.raises(InputError, match="method"):
         SewConfig(method="glue")
+
+
+def test_a_sewn_garment_simulates_from_its_flat_rest_state_and_keeps_its_settled_drape():
+    """simulate() takes the welded garment's per-corner 2D rest state (SceneArrays.rest_corners):
+    the two squares sewn and folded open rest flat (no rest curvature), and the result carries the
+    garment at the end of the settle phase (``settled``)."""
+    from datagen.sim.scene import RunConfig, SceneArrays, simulate
+    from datagen.sim.sewing import rest_corners
+
+    g = two_squares()
+    bv, bf = _far_body()
+    r = sew(g, bv, bf, config=SewConfig(settle_frames=0, relax_frames=2))
+    w = r.garment
+    frames = np.repeat(bv[None], 6, axis=0).astype(np.float32)
+    arrays = SceneArrays(garment_vertices=w.vertices, garment_faces=w.faces, material=w.material,
+                         material_frames=w.material_frames(), weft_scale=np.ones(len(w.faces)), body_frames=frames,
+                         body_faces=bf, fps=30.0, lead_frames=0, rest_corners=rest_corners(w))
+    cfg = RunConfig(settle_rest=2, lead_in=0.0, settle_pose=0, ramp=0.0)
+    res = simulate([arrays], cfg, device="cpu")[0]
+    assert res.settled is not None and res.settled.shape == (w.vertex_count, 3)
+    assert "settled" in res.arrays()
+    assert np.isfinite(res.positions).all()
+    # without a ramp the last settle frame is the first recorded one
+    assert res.recorded_from == cfg.settle_rest - 1
+    np.testing.assert_array_equal(res.settled, res.positions[0])
+
+
+def test_an_unsewn_pattern_garment_is_refused_by_the_scene():
+    from datagen.sim.scene import Scene, scene_arrays
+
+    g = two_squares()  # scene_arrays reads the garment before it poses anything: no body or motion needed
+    with pytest.raises(InputError, match="sewn before"):
+        scene_arrays(Scene(garment=g, body=None, betas=np.zeros(10), motion=None), 0.0)
