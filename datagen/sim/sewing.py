@@ -19,9 +19,9 @@ around the body, not welded, ``stitch_pairs`` to be sewn) and the body in its re
    A seam that has not closed after :attr:`SewConfig.sew_frames`, or a sewn garment with vertices
    inside the body or crossing itself beyond the gates, fails with :class:`~datagen.sim.metrics.Failure`
    code ``seam``.
-2. **settling** of the welded garment under gravity until it is static: the largest vertex speed
-   under :attr:`SewConfig.static_speed` for :attr:`SewConfig.static_frames` frames in a row (at most
-   :attr:`SewConfig.settle_frames`).
+2. **settling** of the welded garment under gravity until it is static: 99 % of its vertices moving
+   slower than :attr:`SewConfig.static_speed` over a frame, :attr:`SewConfig.static_frames` frames in
+   a row (at most :attr:`SewConfig.settle_frames`).
 
 The result (:class:`SewResult`) holds the welded garment (one manifold mesh whose vertices are the
 settled positions, its per-corner 2D rest coordinates in ``face_uv``), the weld map from the
@@ -68,7 +68,9 @@ class SewConfig:
         sew_frames: the most frames sewing may take before the garment fails.
         relax_frames: frames without gravity after welding (the seams' neighbourhood relaxes).
         settle_frames: the most frames of settling under gravity.
-        static_speed: the largest vertex speed [m/s] of a static garment.
+        static_speed: the speed [m/s] under which 99 % of a static garment's vertices move over a
+            frame (displacement / dt; the largest is no criterion: the solver's velocity of a vertex
+            held where body parts meet carries a substep's contact jump, 2.4 m/s on a skirt at rest).
         static_frames: frames in a row the garment must be static to end the settling.
         gravity_scale: gravity while sewing, as a share of the solver's [-] (0: none).
 
@@ -121,7 +123,8 @@ class SewResult:
         stretch: the largest principal strain of all faces, every frame of both stages.
         self_intersections: cloth edge-triangle crossings, every frame of both stages.
         penetration: vertices inside the body, every frame of both stages.
-        speed: the largest vertex speed [m/s], every frame of both stages.
+        speed: the 99th percentile of the vertices' speeds over the frame (displacement / dt) [m/s],
+            every frame of both stages.
         sew_frames: frames sewing took (to the weld), or -1 when the seams did not close.
         settle_frames: frames settling took to be static, or -1 when it did not get there.
         failure: why the garment could not be sewn, or None.
@@ -249,24 +252,26 @@ class _Run:
         self.control = BodyControl.from_numpy(model, body_vertices)
         self.solver.reset_body(self.control)
         self.seam_faces = seam_faces
+        self.x_prev = model.host.rest_positions
 
     def step(self, dt: float, series: dict) -> np.ndarray:
         self.solver.step(self.a, self.b, self.control, dt)
         self.a, self.b = self.b, self.a
         frame = self.metrics.measure(self.a, self.solver)
         x = self.a.positions.numpy().copy()
-        v = self.a.velocities.numpy()
         s = face_stretch(self.model.host, x)
         series["stretch"].append(float(s.max()))
         series["seam_stretch"].append(float(s[self.seam_faces].max()) if self.seam_faces.any() else 0.0)
         series["self_intersections"].append(int(frame["self_intersections"][0]))
         series["penetration"].append(int(frame["penetration_count"][0]))
-        series["speed"].append(float(np.linalg.norm(v, axis=1).max()))
-        self.last = frame
+        moved = np.linalg.norm(x - self.x_prev, axis=1) / dt  # over the frame: a substep's contact jump aside
+        series["speed"].append(float(np.percentile(moved, 99)))
+        self.x_prev = x
         return x
 
     def set_positions(self, x: np.ndarray) -> None:
         self.a.positions.assign(np.asarray(x, dtype=np.float32))
+        self.x_prev = np.asarray(x, dtype=np.float64)
 
     def set_targets(self, x: np.ndarray) -> None:
         """Where the held (inactive) vertices are at the end of the next step [N, 3]."""
@@ -369,7 +374,7 @@ def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face
         if config.method == "weld" and relax:
             sewn_frames = -1
             failure = failure or Failure("seam", f"the welded seams are not relaxed after {relax} frames (seam "
-                                                 f"stretch {series['seam_stretch'][-1]:.0%}, largest speed "
+                                                 f"stretch {series['seam_stretch'][-1]:.0%}, 99th percentile speed "
                                                  f"{series['speed'][-1]:.2f} m/s)")
     sewn = xw.copy()
     failure = failure or _gate(series, welded.vertex_count, thresholds, limit, "after sewing")
