@@ -9,8 +9,8 @@ around the body, not welded, ``stitch_pairs`` to be sewn) and the body in its re
 
    - ``"stitch"`` (default): every stitched vertex is led (held like a pinned vertex, at a target
      moved every frame) towards the centroid of its stitched group by at most
-     :attr:`SewConfig.speed` x dt a frame, each target pushed out of the body (to the placement's
-     clearance), so a seam is led around a limb, not through it; the rest of the cloth follows in
+     :attr:`SewConfig.speed` x dt a frame, each target pushed out of the body (to
+     :attr:`SewConfig.clearance`), so a seam is led around a limb, not through it; the rest of the cloth follows in
      the solver's step, with body and self contact. Once the largest
      gap is under :attr:`SewConfig.tolerance` the pairs are welded into one vertex at their centroid.
    - ``"weld"``: the pairs are welded into one vertex at their centroid from the first frame
@@ -73,6 +73,7 @@ class SewConfig:
             held where body parts meet carries a substep's contact jump, 2.4 m/s on a skirt at rest).
         static_frames: frames in a row the garment must be static to end the settling.
         gravity_scale: gravity while sewing, as a share of the solver's [-] (0: none).
+        clearance: how far outside the body a led seam vertex is kept [m] (the placement's, 8 mm).
 
     The solver's settings and the gates are the run's (:func:`sew`'s ``solver`` and ``thresholds``;
     :class:`~datagen.sim.scene.RunConfig` holds this as ``sewing`` beside them).
@@ -88,6 +89,7 @@ class SewConfig:
     static_speed: float = field(default=0.02, metadata={"min": 0.0})
     static_frames: int = field(default=5, metadata={"min": 1})
     gravity_scale: float = field(default=0.0, metadata={"min": 0.0, "max": 1.0})
+    clearance: float = field(default=0.008, metadata={"min": 0.0, "max": 0.05})
 
     def __post_init__(self):
         if self.method not in ("stitch", "weld"):
@@ -196,8 +198,6 @@ def weld_garment(garment, positions: np.ndarray | None = None):
     (default: the garment's vertices); faces are renumbered, their corners keep their own panel's
     2D coordinate (``face_uv``); a welded vertex takes ``uv``, ``rest_uv`` and panel of its first
     member. Openings are those of the welded mesh (the pattern's ``sewn_openings`` names them)."""
-    from datagen.garment.mesh import GarmentMesh
-
     if garment.rest_uv is None:
         raise InputError("weld_garment welds a garment of the pattern kind (rest_uv set)")
     x = np.asarray(garment.vertices if positions is None else positions, dtype=np.float64)
@@ -216,7 +216,7 @@ def weld_garment(garment, positions: np.ndarray | None = None):
     seam = np.zeros(n, dtype=bool)
     seam[weld[pairs.ravel()]] = True
     loops = {k: _dedup(weld[np.asarray(v)]) for k, v in garment.loops.items()}
-    out = GarmentMesh.create(welded, faces, uv=garment.uv[first], vertex_region=garment.vertex_region[first],
+    out = type(garment).create(welded, faces, uv=garment.uv[first], vertex_region=garment.vertex_region[first],
                              region_names=garment.region_names, material=garment.material,
                              metadata=dataclasses.replace(garment.metadata), face_uv=rest_corners(garment),
                              extra_seam=seam, loops=loops, rest_uv=garment.rest_uv[first],
@@ -313,7 +313,7 @@ def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face
         return float(np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1).max())
 
     if config.method == "stitch":
-        from datagen.garment.pattern.placement import CLEARANCE, push_out
+        from datagen.geometry.queries import push_out
 
         seam_v = member_count[weld] > 1
         seam_faces = seam_v[garment.faces].any(1)
@@ -332,13 +332,13 @@ def sew(garment, body_vertices: np.ndarray, body_faces: np.ndarray, *, body_face
                 break
             centre = np.stack([np.bincount(weld, weights=x[:, k], minlength=n_groups) for k in range(3)], 1)
             centre /= member_count[:, None]
-            centre = push_out(centre, body_vertices, body_faces, CLEARANCE)  # the seam closes outside the body
+            centre = push_out(centre, body_vertices, body_faces, config.clearance)  # the seam closes outside the body
             d = centre[weld[ids]] - x[ids]
             dist = np.linalg.norm(d, axis=1, keepdims=True)
             step = np.where(dist < config.tolerance / 4, 1.0, np.minimum(1.0, reach / np.maximum(dist, 1e-12)))
             target = x.copy()
             # each step kept outside the body: a seam led around a limb, not through it
-            target[ids] = push_out(x[ids] + d * step, body_vertices, body_faces, CLEARANCE)
+            target[ids] = push_out(x[ids] + d * step, body_vertices, body_faces, config.clearance)
             run.set_targets(target)
             x = run.step(dt, series)
             x[ids] = target[ids]

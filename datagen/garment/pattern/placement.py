@@ -25,6 +25,7 @@ import numpy as np
 
 from datagen.errors import InputError
 from datagen.garment.pattern.mesh import FlatPatternMesh
+from datagen.geometry.queries import push_out
 
 __all__ = ["CLEARANCE", "SEPARATION", "PlacementReport", "place", "placement_report", "push_out", "separate"]
 
@@ -76,31 +77,6 @@ def _wrap(mesh: FlatPatternMesh, body_vertices: np.ndarray) -> np.ndarray:
         x, y = rel @ ex, rel @ ey
         theta = x / d
         out[sel] = axis + y[:, None] * ey + d * (np.cos(theta)[:, None] * n + np.sin(theta)[:, None] * ex)
-    return out
-
-
-def push_out(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray, clearance: float) -> np.ndarray:
-    from datagen.geometry.queries import mesh_closest_points, mesh_signed_distance, warp_mesh
-
-    body = warp_mesh(body_vertices, body_faces)
-    sd = mesh_signed_distance(body, points, 10.0)
-    close = sd < clearance
-    if not close.any():
-        return points
-    closest = mesh_closest_points(body, points[close], 10.0)
-    away = points[close] - closest
-    dist = np.linalg.norm(away, axis=1, keepdims=True)
-    outward = np.where(sd[close, None] < 0, -away, away) / np.maximum(dist, 1e-12)
-    # a vertex exactly on the surface has no direction: use the body's vertex normal at the closest point
-    flat = dist[:, 0] < 1e-9
-    if flat.any():
-        import trimesh
-
-        tm = trimesh.Trimesh(body_vertices, body_faces, process=False)
-        tri = tm.nearest.on_surface(closest[flat])[2]
-        outward[flat] = tm.face_normals[tri]
-    out = points.copy()
-    out[close] = closest + outward * clearance
     return out
 
 
