@@ -81,6 +81,12 @@ CASES: tuple[Case, ...] = (
          summary="random pattern designs x thin/regular/fat: how many build, mesh, place and pass the checks; time, vertices, angles"),
     Case(name="pattern-gallery", module="benchmarks.pattern_gallery",
          summary="the gallery of docs/patterns/: flat panels beside the placed 3D panels across the programs and bodies"),
+    Case(name="sewing-survey", module="benchmarks.sewing_survey",
+         summary="random pattern designs sewn on the bodies at rest: how many sew (gap < 1 mm), settle, pass; causes, time"),
+    Case(name="sewing-sequence", module="benchmarks.sewing_sequence",
+         summary="pattern garments placed, sewn and settled on the body: the picture docs/patterns/sewing_sequence.png"),
+    Case(name="sewing-cusick", module="benchmarks.sewing_cusick",
+         summary="the Cusick drape test with the specimen cut as a flat panel (2D rest state), started domed: DC per material"),
     Case(name="pattern-garmentcode", module="benchmarks.pattern_garmentcode",
          summary="GarmentCode specification files read, drawn, meshed and written back: structure and largest difference"),
     # simulator

@@ -62,7 +62,7 @@ JOINT_COUNT = 24
 SPLIT_NAMES: tuple[str, ...] = ("train", "val", "test")
 """Split codes: ``samples/split`` = index into this tuple."""
 
-FAILURE_NAMES: tuple[str, ...] = ("ok", "nan", "penetration", "self-intersection", "stretch", "slip")
+FAILURE_NAMES: tuple[str, ...] = ("ok", "nan", "penetration", "self-intersection", "stretch", "slip", "seam")
 """Default failure codes (``samples/failure`` = index; 0 = ok): the reasons ``datagen.sim.metrics``
 gives, by the word before their colon. A store may be created with a longer list."""
 

@@ -17,9 +17,12 @@ def register(sub, formatter) -> None:
                        description="Make a garment on a body in its rest pose, let it settle, move the body into "
                        "the motion's first pose, and simulate the motion with body and self-collision. Prints "
                        "progress and the per-frame metrics summary; writes positions and metrics to an .npz.",
-                       epilog="example:\n  drape simulate --garment tshirt --body regular --motion walk --frames 120 "
-                       "--out run.npz")
+                       epilog="examples:\n  drape simulate --garment tshirt --body regular --motion walk --frames 120 "
+                       "--out run.npz\n  drape simulate --pattern top:3 --body regular --motion walk --frames 60 --out top.npz")
     p.add_argument("--garment", default="tshirt", help="garment type (`drape garment list`)")
+    p.add_argument("--pattern", default=None, metavar="NAME[:SEED]",
+                   help="a sewing-pattern program instead of --garment (`drape garment list`), its design drawn by "
+                   "SEED (default 0): placed around the body, sewn and settled at rest, then simulated")
     p.add_argument("--garment-seed", type=int, default=0, help="seed of the garment's style parameters")
     p.add_argument("--body", default="regular", help="body shape preset: thin, regular, fat")
     p.add_argument("--motion", default="walk", help="motion label (`drape motion list`)")
@@ -57,16 +60,25 @@ def _cmd_simulate(args) -> int:
     device = warp_device(args.device)
     model = default_body()
     betas = resolve_betas(model, body=args.body)[0]
-    garment = make_garment(args.garment, model, betas, seed=args.garment_seed)
     given = {k: v for k, v in (("substeps", args.substeps), ("iterations", args.iterations)) if v is not None}
     config = RunConfig(solver=SolverConfig(steps=StepConfig(**given),
                                            self_contact=SelfContactConfig(enabled=not args.no_self_collision)))
+    sewn = None
+    if args.pattern:
+        garment, sewn, name = _sewn_pattern(args.pattern, model, betas, config, device)
+        if sewn.failure is not None:
+            print(f"the {name} pattern could not be sewn: {sewn.failure}")
+            return 1
+        garment = sewn.garment
+    else:
+        name = args.garment
+        garment = make_garment(args.garment, model, betas, seed=args.garment_seed)
     motion = make_motion(args.motion, seed=args.motion_seed, frames=config.motion_frames(args.frames, args.fps),
                          fps=args.fps)
     edges = unique_edges(garment.faces)
     edge = float(np.median(np.linalg.norm(garment.vertices[edges[:, 0]] - garment.vertices[edges[:, 1]], axis=1)))
     substeps = config.solver.steps.substeps_for(1.0 / args.fps, edge)  # what the solver runs per frame
-    print(f"{args.garment} ({garment.vertex_count} vertices, {garment.material.name}) on {args.body}, "
+    print(f"{name} ({garment.vertex_count} vertices, {garment.material.name}) on {args.body}, "
           f"{args.motion} {args.frames} frames at {args.fps:g} fps, {substeps} substeps x "
           f"{config.solver.steps.iterations} "
           f"iterations, self-collision {'off' if args.no_self_collision else 'on'}, device {device}", flush=True)
@@ -82,12 +94,15 @@ def _cmd_simulate(args) -> int:
     summary = result.summary()
     # the file is a whole animation (what `drape export` and `drape preview` read, nothing made again):
     # the run's arrays, the garment's rest mesh and panels, the body's rig and what the run was made of
+    extra = {} if sewn is None else {"garment_face_uv": garment.face_uv.astype(np.float32),
+                                     "garment_rest_uv": garment.rest_uv.astype(np.float32),
+                                     "sewing_gap": sewn.gap.astype(np.float32), "pattern": garment.pattern or ""}
     result.save(out, garment_rest=garment.vertices.astype(np.float32), region=garment.vertex_region,
                 region_names=np.array(garment.region_names), body_faces=np.asarray(model.faces),
                 rest_joints=np.asarray(model.rest_joints(betas))[0], parents=np.asarray(model.parents),
                 rest_body_vertices=np.asarray(model.shaped(betas))[0].astype(np.float32),
                 skin_weights=np.asarray(model.weights, np.float32), config=json.dumps(config.as_dict()),
-                garment=args.garment, garment_seed=args.garment_seed, motion=args.motion,
+                garment=name, garment_seed=args.garment_seed, motion=args.motion, **extra,
                 motion_seed=args.motion_seed, body=args.body, material=json.dumps(garment.material.as_dict()))
     frames = len(result.metrics["nan"])
     print(f"wrote {out}: {result.positions.shape[0]} recorded frames of {frames} simulated, "
@@ -95,3 +110,30 @@ def _cmd_simulate(args) -> int:
     for k, v in summary.items():
         print(f"  {k:34s} {v}")
     return 0 if result.failure is None else 1
+
+
+def _sewn_pattern(spec: str, model, betas, config, device):
+    """The pattern garment ``NAME[:SEED]`` made on the body at rest and sewn there: (the placed
+    garment, its :class:`~datagen.sim.sewing.SewResult`, the name printed)."""
+    from datagen.body.measurements import measure_body
+    from datagen.body.skeleton import face_parts
+    from datagen.garment.pattern.garment import pattern_garment
+    from datagen.garment.pattern.programs import make_pattern
+    from datagen.sim.sewing import PLACEMENT, sew
+
+    name, _, seed = spec.partition(":")
+    try:
+        seed = int(seed or 0)
+    except ValueError:
+        raise InputError(f"--pattern takes NAME[:SEED] with an integer seed, got {spec!r}") from None
+    rest = np.asarray(model.shaped(betas))[0]
+    placed = pattern_garment(make_pattern(name, seed, measure_body(model, betas)), rest, np.asarray(model.faces),
+                             mode=PLACEMENT, seed=seed, betas=betas)
+    print(f"pattern {name}:{seed}: {placed.vertex_count} vertices in {len(placed.region_names)} panels, "
+          f"{len(placed.stitch_pairs)} stitched pairs; sewing on the body at rest", flush=True)
+    r = sew(placed, rest, np.asarray(model.faces), body_face_part=face_parts(model.weights, model.faces),
+            config=config.sewing, solver=config.solver, thresholds=config.thresholds, device=device)
+    print(f"  sewn in {r.sew_frames} frames (largest gap {1000 * r.gap[0]:.0f} mm placed, "
+          f"{1000 * r.gap[max(r.sew_frames, 0)]:.2f} mm sewn), static after {r.settle_frames} frames of settling, "
+          f"{r.garment.vertex_count} vertices welded, {r.seconds:.1f} s", flush=True)
+    return placed, r, f"pattern:{name}:{seed}"

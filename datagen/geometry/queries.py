@@ -19,7 +19,8 @@ from __future__ import annotations
 import numpy as np
 import warp as wp
 
-__all__ = ["MovingMesh", "mesh_closest_points", "mesh_signed_distance", "segments_hit_mesh", "signed_distance", "warp_mesh"]
+__all__ = ["MovingMesh", "mesh_closest_points", "mesh_signed_distance", "push_out", "segments_hit_mesh", "signed_distance",
+           "warp_mesh"]
 
 WINDING_ACCURACY = wp.constant(2.0)
 """``accuracy`` (beta) of warp's winding-number sign: the dipole expansion's far-field factor."""
@@ -134,3 +135,29 @@ class MovingMesh:
     def inside_count(self, points: np.ndarray, max_dist: float = 1.0) -> int:
         """How many of ``points`` [N, 3] are inside the posed mesh (signed distance below 0)."""
         return int((self.signed_distance(points, max_dist) < 0).sum())
+
+
+def push_out(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray, clearance: float) -> np.ndarray:
+    """``points`` [N, 3] (m) with every point inside the closed mesh (``body_vertices`` [V, 3],
+    ``body_faces`` [F, 3]) or closer than ``clearance`` [m] to it moved to its closest point plus
+    ``clearance`` outward (a point on the surface: along the face normal there); the others as given."""
+    body = warp_mesh(np.asarray(body_vertices, dtype=np.float64), np.asarray(body_faces))
+    sd = mesh_signed_distance(body, points, 10.0)
+    close = sd < clearance
+    if not close.any():
+        return points
+    closest = mesh_closest_points(body, points[close], 10.0)
+    away = points[close] - closest
+    dist = np.linalg.norm(away, axis=1, keepdims=True)
+    outward = np.where(sd[close, None] < 0, -away, away) / np.maximum(dist, 1e-12)
+    # a vertex exactly on the surface has no direction: use the body's vertex normal at the closest point
+    flat = dist[:, 0] < 1e-9
+    if flat.any():
+        import trimesh
+
+        tm = trimesh.Trimesh(body_vertices, body_faces, process=False)
+        tri = tm.nearest.on_surface(closest[flat])[2]
+        outward[flat] = tm.face_normals[tri]
+    out = points.copy()
+    out[close] = closest + outward * clearance
+    return out

@@ -50,7 +50,7 @@ class FailureThresholds:
     slip: float = 0.06
 
 
-FAILURE_CODES = ("nan", "penetration", "self-intersection", "slip", "stretch")
+FAILURE_CODES = ("nan", "penetration", "self-intersection", "slip", "stretch", "seam")
 """What a scene can fail on (:attr:`Failure.code`); a store's ``samples/failure`` numbers them by
 ``schemas.dataset.FAILURE_NAMES``, which holds every one of them."""
 

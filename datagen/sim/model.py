@@ -36,6 +36,8 @@ class _ClothPart:
     frames: np.ndarray | None
     pinned: np.ndarray | None
     weft_scale: np.ndarray | None = None
+    rest_corners: np.ndarray | None = None  # 2D rest coordinates of every face corner [F, 3, 2]
+    grain: np.ndarray | None = None  # warp direction of every face in its 2D frame [F, 2]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -231,6 +233,9 @@ class _Gathered:
     materials: list  # Material of every part
     weft_scale: np.ndarray  # per face [F]
     active: np.ndarray  # 1 simulated, 0 pinned, int32 [N]
+    rest_corners: np.ndarray | None = None  # 2D rest coordinates per face corner [F, 3, 2] (None: no flat part)
+    grain: np.ndarray | None = None  # warp direction per face in its 2D frame [F, 2] (flat faces)
+    flat: np.ndarray | None = None  # per face: its rest state is flat 2D cloth [F] bool (None: no flat part)
 
 
 @dataclass(frozen=True)
@@ -322,7 +327,8 @@ class ClothModelBuilder:
 
     def add_cloth(self, vertices, faces, *, material_name: Material | str = "cotton", scene: int = 0,
                   material_frames: np.ndarray | None = None, pinned: np.ndarray | None = None,
-                  weft_scale: np.ndarray | None = None) -> int:
+                  weft_scale: np.ndarray | None = None, rest_corners: np.ndarray | None = None,
+                  grain: np.ndarray | None = None) -> int:
         """Add a cloth mesh to ``scene``; returns the id its first vertex will have in the model
         when cloths are added in scene order (``finalize`` groups them by scene).
 
@@ -335,6 +341,14 @@ class ClothModelBuilder:
             pinned: indices of vertices held at their targets (tests: a hanging strip).
             weft_scale: rest length along the weft relative to ``vertices``, per face [F] (an
                 elastic waistband: below 1, the face is stretched around the body as built).
+            rest_corners: the flat rest state of a sewing-pattern garment: the 2D panel coordinate
+                [m] of every face corner [F, 3, 2] (corners, not vertices: a vertex welded on a
+                seam has one coordinate per panel). Given, each face's reference shape and rest
+                area come from it, its mass from the 2D area, and every hinge's rest angle is 0
+                (flat cloth, across seams too: :func:`_bending`); ``vertices`` are then only the
+                start positions. None: the rest state is ``vertices`` as built (shell garments).
+            grain: with ``rest_corners``, the warp direction of every face in its 2D frame [F, 2]
+                (unit; the weft is the warp turned by -90 degrees); default (0, 1).
         """
         v, f = _checked_mesh(vertices, faces, "cloth")
         if scene < 0:
@@ -345,9 +359,23 @@ class ClothModelBuilder:
                                                       and (weft_scale <= 1.5).all()):
                 raise InputError(f"weft_scale must hold one value in (0.5, 1.5] per face ({len(f)}), got shape "
                                  f"{weft_scale.shape}")
+        if rest_corners is not None:
+            rest_corners = np.asarray(rest_corners, dtype=np.float64)
+            if rest_corners.shape != (len(f), 3, 2) or not np.isfinite(rest_corners).all():
+                raise InputError(f"rest_corners must hold finite 2D coordinates of every face corner, shape "
+                                 f"[{len(f)}, 3, 2], got {rest_corners.shape}")
+            grain = np.tile([0.0, 1.0], (len(f), 1)) if grain is None else np.asarray(grain, dtype=np.float64)
+            norm = np.linalg.norm(grain, axis=1, keepdims=True) if grain.ndim == 2 else None
+            if grain.shape != (len(f), 2) or not (np.isfinite(grain).all() and (norm > 1e-9).all()):
+                raise InputError(f"grain must hold one nonzero 2D direction per face, shape [{len(f)}, 2], "
+                                 f"got {grain.shape}")
+            grain = grain / norm
+        elif grain is not None:
+            raise InputError("grain is the warp direction in the 2D rest state: give rest_corners with it")
         first = sum(len(p.vertices) for p in self._parts)
         self._parts.append(_ClothPart(v, f, material(material_name), int(scene), material_frames,
-                                      None if pinned is None else np.asarray(pinned, dtype=np.int64), weft_scale))
+                                      None if pinned is None else np.asarray(pinned, dtype=np.int64), weft_scale,
+                                      rest_corners, grain))
         return first
 
     def finalize(self, device: str | None = None) -> ClothModel:
@@ -361,7 +389,7 @@ class ClothModelBuilder:
         topo = _parts_topology([(len(p.vertices), p.faces) for p in self._parts])
         membrane = _membrane(g)
         vertex = _vertex_materials(g)
-        bending = _bending(g.X, topo.edges, g.materials, vertex.material)
+        bending = _bending(g.X, topo.edges, g.materials, vertex.material, g)
         scene_count = max(int(g.scene.max()), max(self._bodies, default=0)) + 1
         bodies = self._body_arrays(scene_count)
         without_cloth = sorted(set(range(scene_count)) - set(g.scene.tolist()))
@@ -401,10 +429,18 @@ class ClothModelBuilder:
         active = np.ones(base, dtype=np.int32)
         if pins:
             active[np.concatenate(pins)] = 0
+        corners = grain = flat = None
+        if any(p.rest_corners is not None for p in self._parts):  # shells alone: no flat arrays at all
+            corners = np.concatenate([np.zeros((len(p.faces), 3, 2)) if p.rest_corners is None else p.rest_corners
+                                      for p in self._parts])
+            grain = np.concatenate([np.tile([0.0, 1.0], (len(p.faces), 1)) if p.grain is None else p.grain
+                                    for p in self._parts])
+            flat = np.concatenate([np.full(len(p.faces), p.rest_corners is not None) for p in self._parts])
         return _Gathered(X=np.concatenate(verts), F=np.concatenate(faces),
                          scene=np.concatenate(scene_of).astype(np.int32), frames=np.concatenate(frames),
                          face_material=np.concatenate(face_mat), materials=[p.material for p in self._parts],
-                         weft_scale=np.concatenate(wscale), active=active)
+                         weft_scale=np.concatenate(wscale), active=active, rest_corners=corners, grain=grain,
+                         flat=flat)
 
     def _body_arrays(self, scene_count: int) -> _Bodies:
         """Every scene's body concatenated in scene order (a scene without a body gets a tiny
@@ -445,20 +481,36 @@ def _membrane(g: _Gathered) -> _Membrane:
     The membrane energy is the integral of ψ(F) over the reference shape, so its weight is the
     reference area |det Dm|/2. Mass and vertex area are the built area's: a waistband's weft scale
     pre-stretches the fabric as built, it does not add or remove fabric (the garment weighs what
-    its pattern does), and drag and friction act on the surface as it is."""
+    its pattern does), and drag and friction act on the surface as it is.
+
+    A face with a flat rest state (``g.flat``: a sewing-pattern garment) takes Dm from its corners'
+    2D coordinates in the (weft, warp) frame of its grain (:func:`flat_rest_shape`), its rest area
+    from that, and its mass and vertex area from the 2D area (the fabric as cut; the 3D start
+    positions are only where the cloth starts). Faces without one are computed as before."""
     X, F, mats, fm = g.X, g.F, g.materials, g.face_material
     e1, e2 = X[F[:, 1]] - X[F[:, 0]], X[F[:, 2]] - X[F[:, 0]]
     weft = np.array(g.frames[:, 0], dtype=np.float64)
     nrm = np.cross(e1, e2)
     area = 0.5 * np.linalg.norm(nrm, axis=1)
-    if (area < 1e-12).any():
-        raise InputError(f"{int((area < 1e-12).sum())} cloth triangles have (almost) zero area: remesh the garment")
+    shell = np.ones(len(F), dtype=bool) if g.flat is None else ~g.flat
+    if (area[shell] < 1e-12).any():
+        raise InputError(f"{int((area[shell] < 1e-12).sum())} cloth triangles have (almost) zero area: remesh the garment")
+    if g.flat is not None:  # a flat face placed degenerate in 3D: its 3D frame is unused, keep it finite
+        area = np.where(shell, area, np.maximum(area, 1e-30))
     nrm /= 2 * area[:, None]
     weft = weft - nrm * np.einsum("ij,ij->i", weft, nrm)[:, None]
     weft /= np.linalg.norm(weft, axis=1, keepdims=True)
     warp_dir = np.cross(nrm, weft)
     Dm = np.stack([np.stack([np.einsum("ij,ij->i", e1, weft), np.einsum("ij,ij->i", e2, weft)], 1),
                    np.stack([np.einsum("ij,ij->i", e1, warp_dir), np.einsum("ij,ij->i", e2, warp_dir)], 1)], 1)
+    if g.flat is not None:
+        dm_flat, area_flat = flat_rest_shape(g.rest_corners[g.flat], g.grain[g.flat])
+        if (area_flat < 1e-12).any():
+            raise InputError(f"{int((area_flat < 1e-12).sum())} cloth triangles have (almost) zero area in their "
+                             "2D rest state: remesh the pattern")
+        Dm[g.flat] = dm_flat
+        area = area.copy()
+        area[g.flat] = area_flat
     Dm[:, 0, :] *= g.weft_scale[:, None]  # a shrunk weft: the rest shape is shorter around the body
     dm_inv = np.linalg.inv(Dm)  # F(x) = Ds Dm⁻¹ with Ds = [x1 - x0, x2 - x0]
     stiff = np.array([[m.stretch_weft, m.stretch_warp, m.poisson_coupling, m.shear, m.buckling_ratio]
@@ -474,6 +526,23 @@ def _membrane(g: _Gathered) -> _Membrane:
                      vertex_area=varea)
 
 
+def flat_rest_shape(corners: np.ndarray, grain: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The reference shape of flat cloth: Dm [F, 2, 2] (rows weft, warp; columns the edges c1 - c0,
+    c2 - c0) and the area [m²] [F] of triangles given by their corners' 2D panel coordinates
+    ``corners`` [F, 3, 2] [m], with the warp ``grain`` [F, 2] (unit) and the weft the warp turned by
+    -90 degrees, (g_y, -g_x) (as :func:`datagen.garment.pattern.garment._grain_uv`). The deformation
+    gradient F = Ds Dm⁻¹ then maps the cut cloth to its 3D shape: its energy is zero wherever the
+    cloth lies in space as it was cut (any rigid motion, or a mirror of it: the membrane reads
+    FᵀF). A face listed clockwise in 2D has det Dm < 0; the area is |det Dm|/2."""
+    c = np.asarray(corners, dtype=np.float64)
+    g = np.asarray(grain, dtype=np.float64)
+    e1, e2 = c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
+    weft = np.stack([g[:, 1], -g[:, 0]], 1)
+    dm = np.stack([np.stack([np.einsum("ij,ij->i", e1, weft), np.einsum("ij,ij->i", e2, weft)], 1),
+                   np.stack([np.einsum("ij,ij->i", e1, g), np.einsum("ij,ij->i", e2, g)], 1)], 1)
+    return dm, 0.5 * np.abs(np.linalg.det(dm))
+
+
 def _vertex_materials(g: _Gathered) -> _VertexMaterial:
     """The material of every vertex (that of the last face listing it) and its damping, friction,
     thickness and strain limit."""
@@ -486,9 +555,18 @@ def _vertex_materials(g: _Gathered) -> _VertexMaterial:
                            max_strain=np.array([m.max_strain for m in g.materials])[vmat])
 
 
-def _bending(X: np.ndarray, E: np.ndarray, mats: list, vertex_material: np.ndarray) -> _Bending:
+def _bending(X: np.ndarray, E: np.ndarray, mats: list, vertex_material: np.ndarray, g: _Gathered | None = None
+             ) -> _Bending:
     """Rest dihedral angle and stiffness 3 k_b |ē|²/(Ā₁+Ā₂) of every interior hinge (0 on the
-    boundary), from the built shape; k_b is the material of the hinge's first vertex."""
+    boundary), from the built shape; k_b is the material of the hinge's first vertex.
+
+    A hinge of flat cloth (a face with a 2D rest state on either side, ``g.flat``) rests at angle 0,
+    inside a panel and across a seam alike, and takes |ē| and the areas from the 2D rest state
+    (:func:`_flat_hinges`). Across a seam, 0 is the choice of a seam that was pressed open: the
+    angle at which two panels meet once sewn depends on the body they were sewn on and on how
+    far the sewing got, so it is not a property of the cloth; a rest angle taken from it would
+    hold the body's shape in a garment on every other body. A seam's real stiffness (the seam
+    allowance) is not modelled."""
     inner = (E[:, 2] >= 0) & (E[:, 3] >= 0)
     rest_angle = np.zeros(len(E))
     bend_k = np.zeros(len(E))
@@ -503,8 +581,42 @@ def _bending(X: np.ndarray, E: np.ndarray, mats: list, vertex_material: np.ndarr
                                        np.einsum("ij,ij->i", n1, n2))
         a12 = 0.5 * (np.linalg.norm(N1, axis=1) + np.linalg.norm(N2, axis=1))
         kb = np.array([m.bending for m in mats])[vertex_material[E[inner, 0]]]
+        if g is not None and g.flat is not None:
+            flat, L2, a2 = _flat_hinges(g, E[inner])
+            L, a12 = np.where(flat, L2, L), np.where(flat, a2, a12)
+            ra = rest_angle[inner]
+            ra[flat] = 0.0
+            rest_angle[inner] = ra
         bend_k[inner] = kb * 3.0 * L**2 / a12
     return _Bending(edge_pairs=E[:, :2], rest_angle=rest_angle, bend_k=bend_k)
+
+
+def _flat_hinges(g: _Gathered, hinges: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """For interior hinges [H, 4]: whether a face on either side has a flat rest state [H], the
+    edge's 2D rest length [m] [H] (the mean of its two faces' lengths where both are flat: a seam
+    joins two panels' edges, equal to their ease) and the sum of the two faces' 2D areas [m²] [H]
+    (a shell face on one side: its built area), as the built shape's Ā₁+Ā₂."""
+    F = g.F
+    he = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    face = np.tile(np.arange(len(F)), 3)
+    corner = np.repeat(np.arange(3), len(F))
+    c = g.rest_corners
+    he_len = np.linalg.norm(c[face, (corner + 1) % 3] - c[face, corner], axis=1)
+    e1, e2 = c[:, 1] - c[:, 0], c[:, 2] - c[:, 0]
+    area2d = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
+    area3d = 0.5 * np.linalg.norm(np.cross(g.X[F[:, 1]] - g.X[F[:, 0]], g.X[F[:, 2]] - g.X[F[:, 0]]), axis=1)
+    face_area = np.where(g.flat, area2d, area3d)
+    n = len(g.X)
+    key = np.minimum(he[:, 0], he[:, 1]) * n + np.maximum(he[:, 0], he[:, 1])
+    order = np.argsort(key, kind="stable")
+    hkey = np.minimum(hinges[:, 0], hinges[:, 1]) * n + np.maximum(hinges[:, 0], hinges[:, 1])
+    pos = np.searchsorted(key[order], hkey)
+    a, b = order[pos], order[pos + 1]  # an interior edge has exactly two half-edges, adjacent once sorted
+    fa, fb = face[a], face[b]
+    flat = g.flat[fa] | g.flat[fb]
+    wa, wb = g.flat[fa].astype(float), g.flat[fb].astype(float)
+    length = (wa * he_len[a] + wb * he_len[b]) / np.maximum(wa + wb, 1.0)
+    return flat, length, face_area[fa] + face_area[fb]
 
 
 def _bounds(scene_of: np.ndarray, scene_count: int) -> np.ndarray:

@@ -36,6 +36,7 @@ from datagen.sim.interface import SOLVERS, make_solver, solver_class
 from datagen.sim.metrics import METRIC_NAMES, Failure, FailureThresholds, Metrics
 from datagen.sim.model import ClothModelBuilder
 from datagen.sim.settings import SolverConfig
+from datagen.sim.sewing import SewConfig
 from datagen.sim.state import BodyControl, ClothState
 
 log = logging.getLogger(__name__)
@@ -53,6 +54,8 @@ class RunConfig:
         solver_name: which solver of :data:`datagen.sim.interface.SOLVERS` runs the scenes.
         solver: the solver's settings.
         thresholds: what makes a scene fail.
+        sewing: how a pattern garment is sewn and settled on the body at rest before its scene
+            (:func:`datagen.sim.sewing.sew`, with this run's solver settings and thresholds).
         freeze_failed: stop simulating a scene from the frame it fails (its vertices held where they
             are): a failed scene's frames are not stored, and a tangled scene is the most expensive
             kind. Its later metrics then describe the frozen cloth; its failure and failure frame do
@@ -67,6 +70,7 @@ class RunConfig:
     solver_name: str = field(default="vbd", metadata={"choices": tuple(SOLVERS)})
     solver: SolverConfig = field(default_factory=SolverConfig)
     thresholds: FailureThresholds = field(default_factory=FailureThresholds)
+    sewing: SewConfig = field(default_factory=SewConfig)
     freeze_failed: bool = True
 
     def __post_init__(self):
@@ -92,12 +96,15 @@ class RunConfig:
         first = self.ramp_frames(fps)[1]
         return slice(first, first + int(recorded))
 
-    def phases(self, recorded: int, fps: float) -> dict[str, int]:
+    def phases(self, recorded: int, fps: float, *, sewn: bool = False) -> dict[str, int]:
         """Simulated frames of each phase of a scene recording ``recorded`` frames (as
         :func:`frame_schedule` runs them): ``settle_rest``, ``lead_in``, ``settle_pose``, ``ramp``
-        (its last frame is the first recorded one, so not counted here) and ``recorded``."""
+        (its last frame is the first recorded one, so not counted here) and ``recorded``; with
+        ``sewn`` (a pattern garment) first ``sewing``: the most frames :func:`datagen.sim.sewing.sew`
+        runs (sewing, relaxing, settling until static; it stops each stage early when done)."""
         ramp, _ = self.ramp_frames(fps)
-        return {"settle_rest": self.settle_rest, "lead_in": int(round(self.lead_in * fps)),
+        first = {"sewing": self.sewing.most_frames()} if sewn else {}
+        return first | {"settle_rest": self.settle_rest, "lead_in": int(round(self.lead_in * fps)),
                 "settle_pose": self.settle_pose, "ramp": max(ramp - 1, 0), "recorded": int(recorded)}
 
     def as_dict(self) -> dict:
@@ -143,7 +150,8 @@ class SceneResult:
         settled: the garment at rest [V, 3] (m, float32): its positions at the end of the settle in
             the body's rest pose, before the lead-in and the motion, in the frame of the garment it
             was given (the lead-in's shift to the motion's first translation taken off): the
-            garment's template (a store's ``garments/rest_vertices``).
+            garment's template (a store's ``garments/rest_vertices``; for a sewn pattern garment, the sewn
+            and settled cloth).
     """
 
     positions: np.ndarray
@@ -221,6 +229,9 @@ class SceneArrays:
         trans: the root translation of every body frame [N, 3] (m), or None.
         garment_shift: the translation [3] (m) added to the given garment's vertices to put it at the
             motion's first translation (taken off again for :attr:`SceneResult.settled`).
+        rest_corners: the flat rest state of a sewn pattern garment: every face corner's 2D panel
+            coordinate in its (weft, warp) frame [F, 3, 2] (m) (:func:`datagen.sim.sewing.rest_corners`);
+            None: the garment rests as built (a shell).
     """
 
     garment_vertices: np.ndarray
@@ -236,6 +247,7 @@ class SceneArrays:
     poses: np.ndarray | None = None
     trans: np.ndarray | None = None
     garment_shift: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    rest_corners: np.ndarray | None = None
 
     def __post_init__(self):
         if not isinstance(self.material, Material):
@@ -285,9 +297,17 @@ def scene_arrays(scene: Scene, lead_in: float, posed: tuple | None = None) -> Sc
     """Pose the scene's body over its motion with a lead-in of ``lead_in`` seconds from the rest pose
     (``posed``: :func:`_posed_body`'s result for it, when already made)."""
     s = scene
-    motion, lead, verts, shift, parts = posed if posed is not None else _posed_body(s, lead_in)
     g = s.garment
-    return SceneArrays(garment_vertices=g.vertices + shift, garment_faces=np.asarray(g.faces),
+    corners = None
+    if getattr(g, "kind", "shell") == "pattern":
+        from datagen.sim.sewing import rest_corners
+
+        if g.stitch_pairs is not None and len(g.stitch_pairs):
+            raise InputError("a pattern garment must be sewn before it is simulated: datagen.sim.sewing.sew(garment, "
+                             "body_vertices, body_faces) gives the welded garment (`drape simulate --pattern` does it)")
+        corners = rest_corners(g)
+    motion, lead, verts, shift, parts = posed if posed is not None else _posed_body(s, lead_in)
+    return SceneArrays(garment_vertices=g.vertices + shift, garment_faces=np.asarray(g.faces), rest_corners=corners,
                        material=g.material, material_frames=g.material_frames(), weft_scale=g.weft_rest_scale(),
                        body_frames=verts, body_faces=np.asarray(s.body.faces),
                        fps=float(s.motion.fps), lead_frames=lead, body_face_part=parts,
@@ -385,7 +405,7 @@ def simulate(scenes: list[Scene | SceneArrays], config: RunConfig = RunConfig(),
     body_frames = []
     for k, a in enumerate(arrays):
         builder.add_cloth(a.garment_vertices, a.garment_faces, material_name=a.material, scene=k,
-                          material_frames=a.material_frames, weft_scale=a.weft_scale)
+                          material_frames=a.material_frames, weft_scale=a.weft_scale, rest_corners=a.rest_corners)
         builder.add_body(a.body_frames[0], a.body_faces, scene=k, face_part=a.body_face_part)
         body_frames.append(a.body_frames)
     lead = arrays[0].lead_frames

@@ -25,8 +25,9 @@ import numpy as np
 
 from datagen.errors import InputError
 from datagen.garment.pattern.mesh import FlatPatternMesh
+from datagen.geometry.queries import push_out
 
-__all__ = ["CLEARANCE", "PlacementReport", "place", "placement_report"]
+__all__ = ["CLEARANCE", "SEPARATION", "PlacementReport", "place", "placement_report", "push_out", "separate"]
 
 log = logging.getLogger(__name__)
 
@@ -35,7 +36,7 @@ CLEARANCE = 0.008
 
 Mode = Literal["flat", "wrap"]
 
-_MAX_TURN = 0.55 * np.pi
+_MAX_TURN = 0.5 * np.pi
 """Largest angle [rad] a wrapped panel turns either side of its middle."""
 
 
@@ -79,29 +80,41 @@ def _wrap(mesh: FlatPatternMesh, body_vertices: np.ndarray) -> np.ndarray:
     return out
 
 
-def _push_out(points: np.ndarray, body_vertices: np.ndarray, body_faces: np.ndarray, clearance: float) -> np.ndarray:
-    from datagen.geometry.queries import mesh_closest_points, mesh_signed_distance, warp_mesh
+SEPARATION = 0.012
+"""Smallest distance [m] between vertices of two panels that are not sewn to each other, once placed
+(:func:`separate`): above the simulator's cloth-cloth contact distance (4 mm) and its query (10 mm),
+so no two panels start inside each other's contact."""
 
-    body = warp_mesh(body_vertices, body_faces)
-    sd = mesh_signed_distance(body, points, 10.0)
-    close = sd < clearance
-    if not close.any():
-        return points
-    closest = mesh_closest_points(body, points[close], 10.0)
-    away = points[close] - closest
-    dist = np.linalg.norm(away, axis=1, keepdims=True)
-    outward = np.where(sd[close, None] < 0, -away, away) / np.maximum(dist, 1e-12)
-    # a vertex exactly on the surface has no direction: use the body's vertex normal at the closest point
-    flat = dist[:, 0] < 1e-9
-    if flat.any():
-        import trimesh
 
-        tm = trimesh.Trimesh(body_vertices, body_faces, process=False)
-        tri = tm.nearest.on_surface(closest[flat])[2]
-        outward[flat] = tm.face_normals[tri]
-    out = points.copy()
-    out[close] = closest + outward * clearance
-    return out
+def separate(points: np.ndarray, mesh: FlatPatternMesh, gap: float = SEPARATION, rounds: int = 6) -> np.ndarray:
+    """``points`` [V, 3] with panels that come closer than ``gap`` [m] to another panel moved apart:
+    of every two such panels the later one (panel order) moves ``gap`` along its normal (the
+    program's placement normal, away from the body), round after round until none is that close
+    (stitched vertices and the vertices within ``gap`` of them along their own panel's seam aside:
+    they are meant to meet). Two panels laid on the same spot (a cuff on a trouser leg's hem in the
+    flat placement) would start inside the simulator's cloth-cloth contact and burst apart."""
+    from scipy.spatial import cKDTree
+
+    pts = np.asarray(points, dtype=np.float64).copy()
+    pid = mesh.panel_id
+    sewn = np.zeros(len(pts), dtype=bool)
+    if len(mesh.stitch_pairs):
+        sewn[mesh.stitch_pairs.ravel()] = True
+    normals = np.array([p.matrix()[:, 2] for p in mesh.pattern.panels])
+    for _ in range(rounds):
+        free = np.flatnonzero(~sewn)
+        tree = cKDTree(pts[free])
+        pairs = tree.query_pairs(gap, output_type="ndarray")
+        if not len(pairs):
+            break
+        a, b = pid[free[pairs[:, 0]]], pid[free[pairs[:, 1]]]
+        cross = a != b
+        if not cross.any():
+            break
+        later = np.unique(np.maximum(a[cross], b[cross]))
+        for k in later:
+            pts[pid == k] += gap * normals[k]
+    return pts
 
 
 def place(mesh: FlatPatternMesh, body_vertices: np.ndarray, body_faces: np.ndarray, *, mode: Mode = "wrap",
@@ -123,7 +136,10 @@ def place(mesh: FlatPatternMesh, body_vertices: np.ndarray, body_faces: np.ndarr
         raise InputError(f"placement mode must be 'flat' or 'wrap', got {mode!r}")
     # two passes: a vertex pushed onto another part of the body (an arm) is pushed again
     for _ in range(2 if push else 0):
-        pts = _push_out(pts, bv, bf, clearance)
+        pts = push_out(pts, bv, bf, clearance)
+    if push:  # panels pushed onto one another (or placed so) are moved apart, outwards
+        pts = separate(pts, mesh)
+        pts = push_out(pts, bv, bf, clearance)
     return pts
 
 

@@ -61,3 +61,21 @@ def test_bad_mode_and_body_are_refused(hoody_mesh, fat_body):
         place(hoody_mesh, *fat_body, mode="drape")
     with pytest.raises(InputError, match=r"vertices \[V, 3\]"):
         place(hoody_mesh, fat_body[0][:, :2], fat_body[1])
+
+
+def test_placed_panels_keep_apart_from_each_other(hoody_mesh, fat_body):
+    """No two panels start closer than SEPARATION (but at the vertices sewn to each other), in either
+    mode: the simulator's cloth-cloth contact (4 mm, queried at 10 mm) would burst them apart."""
+    from scipy.spatial import cKDTree
+
+    from datagen.garment.pattern.placement import SEPARATION
+
+    sewn = np.zeros(hoody_mesh.vertex_count, dtype=bool)
+    sewn[hoody_mesh.stitch_pairs.ravel()] = True
+    free = np.flatnonzero(~sewn)
+    for mode in ("flat", "wrap"):
+        pos = place(hoody_mesh, *fat_body, mode=mode)
+        pairs = cKDTree(pos[free]).query_pairs(0.9 * SEPARATION, output_type="ndarray")
+        pid = hoody_mesh.panel_id[free]
+        close = pid[pairs[:, 0]] != pid[pairs[:, 1]] if len(pairs) else np.zeros(0, bool)
+        assert not close.any(), f"{mode}: {int(close.sum())} vertex pairs of two panels closer than {SEPARATION} m"

@@ -1,0 +1,129 @@
+"""Sewing pattern garments (datagen.sim.sewing): stitches closed, one welded manifold mesh."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from datagen.errors import InputError
+from datagen.garment.mesh import GarmentMesh
+from datagen.geometry.topology import unique_edges
+from datagen.materials import material
+from datagen.sim.sewing import SewConfig, stitch_groups, sew, weld_garment
+
+
+def _square(n: int, size: float):
+    """A flat square panel: 2D coordinates [n*n, 2] and counter-clockwise triangles."""
+    t = np.linspace(0.0, size, n)
+    X, Y = np.meshgrid(t, t, indexing="ij")
+    uv = np.stack([X.ravel(), Y.ravel()], 1)
+    f = [[i * n + j, (i + 1) * n + j, (i + 1) * n + j + 1] for i in range(n - 1) for j in range(n - 1)]
+    f += [[i * n + j, (i + 1) * n + j + 1, i * n + j + 1] for i in range(n - 1) for j in range(n - 1)]
+    return uv, np.array(f)
+
+
+def two_squares(gap: float = 0.06, n: int = 5, size: float = 0.08) -> GarmentMesh:
+    """Two square panels facing each other ``gap`` apart (z = ±gap/2), their x = 0 edges stitched
+    (vertex (0, y) of one to (0, y) of the other): a pattern garment, not welded."""
+    uv, f = _square(n, size)
+    a = np.stack([uv[:, 0], uv[:, 1], np.full(len(uv), gap / 2)], 1)
+    b = np.stack([uv[:, 0], uv[:, 1], np.full(len(uv), -gap / 2)], 1)
+    left = np.flatnonzero(uv[:, 0] == 0.0)
+    pairs = np.stack([left, left + len(uv)], 1)
+    return GarmentMesh.create(np.concatenate([a, b]), np.concatenate([f, f[:, [0, 2, 1]] + len(uv)]),
+                              uv=np.concatenate([uv, uv]), vertex_region=np.repeat([0, 1], len(uv)),
+                              region_names=["front", "back"], material=material("cotton"),
+                              metadata={"type": "pattern:test"}, rest_uv=np.concatenate([uv, uv]),
+                              stitch_pairs=pairs, face_grain=np.tile([0.0, 1.0], (2 * len(f), 1)),
+                              loops={})
+
+
+def _far_body():
+    """A small tetrahedron far below the cloth: a body no query reaches."""
+    v = np.array([[0.0, -5.0, 0.0], [0.1, -5.0, 0.0], [0.0, -5.0, 0.1], [0.0, -4.9, 0.0]])
+    return v, np.array([[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]])
+
+
+def test_stitch_groups_merge_chains():
+    w = stitch_groups(6, np.array([[0, 3], [3, 5], [1, 4]]))
+    assert w[0] == w[3] == w[5] and w[1] == w[4] and len(set(w.tolist())) == 3
+    assert w.tolist() == [0, 1, 2, 0, 1, 0]
+
+
+def test_two_squares_sewn_along_an_edge_close_within_a_few_frames():
+    """Two 8 cm squares 6 cm apart, stitched along one edge, without gravity: the stitched vertices
+    are led together at 0.5 m/s (the gap closes by 33 mm a frame at 30 frames/s), so the seam is
+    closed (largest gap < 1 mm) within 3 frames; the result is one welded mesh of 45 vertices
+    (50 less the 5 stitched pairs) whose cloth is barely stretched once relaxed."""
+    g = two_squares()
+    bv, bf = _far_body()
+    r = sew(g, bv, bf, config=SewConfig(settle_frames=0, relax_frames=10))
+    print(f"\ntwo squares: gap per frame {np.round(1000 * r.gap, 2)} mm, sewn in {r.sew_frames} frames, "
+          f"stretch after relaxing {r.stretch[-1]:.3f}, seam stretch {r.seam_stretch[-1]:.3f}")
+    assert r.failure is None
+    assert 0 < r.sew_frames <= 3
+    assert r.gap[r.sew_frames] < 1e-3
+    assert r.garment.vertex_count == 45
+    assert r.weld[g.stitch_pairs[:, 0]].tolist() == r.weld[g.stitch_pairs[:, 1]].tolist()
+    assert r.stretch[-1] < 0.05
+
+
+def test_a_welded_pattern_garment_is_one_manifold_mesh():
+    """Welding: every stitched edge is shared by exactly two triangles, no edge by more, the
+    mesh is one connected piece, and each corner keeps its own panel's 2D coordinate."""
+    g = two_squares()
+    w, weld = weld_garment(g)
+    _, counts = unique_edges(w.faces, return_inverse=False, return_counts=True)
+    assert counts.max() == 2
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    e = unique_edges(w.faces)
+    n, _ = connected_components(coo_matrix((np.ones(len(e)), (e[:, 0], e[:, 1])), shape=(w.vertex_count,) * 2))
+    assert n == 1
+    np.testing.assert_array_equal(w.face_uv, g.uv[g.faces])
+    assert w.kind == "pattern" and len(w.stitch_pairs) == 0
+    assert w.seam_vertex[weld[g.stitch_pairs]].all()
+
+
+def test_sew_refuses_a_shell_or_a_sewn_garment():
+    g = two_squares()
+    bv, bf = _far_body()
+    w, _ = weld_garment(g)
+    with pytest.raises(InputError, match="no stitches"):
+        sew(w, bv, bf)
+    with pytest.raises(InputError, match="method"):
+        SewConfig(method="glue")
+
+
+def test_a_sewn_garment_simulates_from_its_flat_rest_state_and_keeps_its_settled_drape():
+    """simulate() takes the welded garment's per-corner 2D rest state (SceneArrays.rest_corners):
+    the two squares sewn and folded open rest flat (no rest curvature), and the result carries the
+    garment at the end of the settle phase (``settled``)."""
+    from datagen.sim.scene import RunConfig, SceneArrays, simulate
+    from datagen.sim.sewing import rest_corners
+
+    g = two_squares()
+    bv, bf = _far_body()
+    r = sew(g, bv, bf, config=SewConfig(settle_frames=0, relax_frames=2))
+    w = r.garment
+    frames = np.repeat(bv[None], 6, axis=0).astype(np.float32)
+    arrays = SceneArrays(garment_vertices=w.vertices, garment_faces=w.faces, material=w.material,
+                         material_frames=w.material_frames(), weft_scale=np.ones(len(w.faces)), body_frames=frames,
+                         body_faces=bf, fps=30.0, lead_frames=0, rest_corners=rest_corners(w))
+    cfg = RunConfig(settle_rest=2, lead_in=0.0, settle_pose=0, ramp=0.0)
+    res = simulate([arrays], cfg, device="cpu")[0]
+    assert res.settled is not None and res.settled.shape == (w.vertex_count, 3)
+    assert "settled" in res.arrays()
+    assert np.isfinite(res.positions).all()
+    # without a ramp the last settle frame is the first recorded one
+    assert res.recorded_from == cfg.settle_rest - 1
+    np.testing.assert_array_equal(res.settled, res.positions[0])
+
+
+def test_an_unsewn_pattern_garment_is_refused_by_the_scene():
+    from datagen.sim.scene import Scene, scene_arrays
+
+    g = two_squares()  # scene_arrays reads the garment before it poses anything: no body or motion needed
+    with pytest.raises(InputError, match="sewn before"):
+        scene_arrays(Scene(garment=g, body=None, betas=np.zeros(10), motion=None), 0.0)
