@@ -16,14 +16,18 @@ the file's bytes (the same file under two paths is one design; an edited file is
 
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import json
+import logging
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from datagen.errors import ConfigError, InputError
+
+log = logging.getLogger(__name__)
 
 PATTERN_PREFIX = "pattern:"
 SPEC_PREFIX = "spec:"
@@ -142,16 +146,18 @@ def store_type_names() -> list[str]:
     return [*garment_type_names(), *(PATTERN_PREFIX + p for p in PROGRAMS), FILE_TYPE]
 
 
-def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None):
+def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None, run_config=None):
     """The :class:`~datagen.garment.mesh.GarmentMesh` of ``entry`` on the body of shape ``betas``
     (rest pose): a shell from the garment cache, or a pattern garment fitted to the body's
     measurements (a program) or read from its file, meshed at ``edge_length`` (default
-    :data:`PATTERN_EDGE_LENGTH`) and placed around the body."""
+    :data:`PATTERN_EDGE_LENGTH`), placed around the body and, given the run's ``run_config`` (a
+    :class:`~datagen.sim.scene.RunConfig`), sewn there and welded (:func:`sewn_garment`)."""
     if entry.kind == "shell":
         from datagen.garment.cache import cached_garment
 
         return cached_garment(entry.name, body_model, betas, seed=entry.seed, target_edge_length=edge_length)
     from datagen.garment.pattern.garment import pattern_garment, stand_on_floor
+    from datagen.sim.sewing import PLACEMENT
 
     body_v = np.asarray(body_model.shaped(np.asarray(betas, float).reshape(1, -1)))[0]
     body_f = np.asarray(body_model.faces)
@@ -166,8 +172,50 @@ def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | N
         pattern = read_spec(entry.path)
         if spec_frame(entry.path) == "garmentcode":
             pattern = stand_on_floor(pattern, body_v)
-    return pattern_garment(pattern, body_v, body_f, edge_length=edge_length or PATTERN_EDGE_LENGTH,
-                           seed=entry.seed if entry.kind == "program" else None, betas=betas)
+    placed = pattern_garment(pattern, body_v, body_f, edge_length=edge_length or PATTERN_EDGE_LENGTH,
+                             seed=entry.seed if entry.kind == "program" else None, betas=betas,
+                             mode=PLACEMENT if run_config is not None else "wrap")
+    return placed if run_config is None else sewn_garment(entry, placed, body_model, betas, run_config)
+
+
+def sewn_garment(entry: GarmentEntry, placed, body_model, betas, run_config):
+    """``placed`` (a pattern garment around the body at rest) sewn there with the run's sewing, solver
+    settings and gates on the CPU and welded (:func:`datagen.sim.sewing.sew`), kept in the garment
+    cache under everything it depends on (the placed panels, the body, the settings). A design that
+    cannot be sewn is refused with the reason: the config should name another seed or design."""
+    import os
+    import uuid
+
+    from datagen.body.cache import cache_root
+    from datagen.body.skeleton import face_parts
+    from datagen.garment.mesh import load_garment
+    from datagen.sim.sewing import sew
+
+    body_v = np.asarray(body_model.shaped(np.asarray(betas, float).reshape(1, -1)))[0]
+    h = hashlib.sha256(json.dumps([str(entry), dataclasses.asdict(run_config.sewing), repr(run_config.solver),
+                                   repr(run_config.thresholds)], default=str).encode())
+    for a in (placed.vertices, placed.faces, placed.stitch_pairs, body_v):
+        h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
+    path = cache_root() / "garments" / f"sewn-{entry.name}-{entry.seed}-{h.hexdigest()[:20]}.npz"
+    if path.is_file():
+        try:
+            return load_garment(path)
+        except Exception as e:  # noqa: BLE001 - a damaged cache file is sewn again
+            log.warning("sewn garment cache file %s does not read back (%s); sewing again", path, e)
+    r = sew(placed, body_v, np.asarray(body_model.faces), body_face_part=face_parts(body_model.weights, body_model.faces),
+            config=run_config.sewing, solver=run_config.solver, thresholds=run_config.thresholds, device="cpu")
+    if r.failure is not None:
+        raise InputError(f"garment {entry} could not be sewn on its body: {r.failure}; name another seed or design "
+                         f"(`python -m benchmarks sewing-survey` shows which sew)")
+    log.info("garment %s sewn in %d frames, static after %d, %.1f s", entry, r.sew_frames, r.settle_frames, r.seconds)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp.npz")
+        r.garment.save(tmp)
+        os.replace(tmp, path)
+    except OSError as e:  # the cache is a convenience
+        log.warning("could not cache the sewn garment in %s: %s", path.parent, e)
+    return r.garment
 
 
 def design_record(entry: GarmentEntry, garment) -> dict | None:
@@ -187,8 +235,11 @@ def corner_rest_uv(garment) -> np.ndarray:
     """The 2D rest coordinate of every triangle corner [F, 3, 2] (m) of a pattern garment: its
     ``rest_uv`` per corner as given ([F, 3, 2], a welded garment's seams have one per panel) or per
     vertex ([V, 2]) taken at the corners."""
-    ruv = np.asarray(garment.rest_uv, dtype=np.float64)
     faces = np.asarray(garment.faces)
+    if garment.face_uv is not None and (garment.stitch_pairs is None or not len(garment.stitch_pairs)):
+        # a sewn, welded garment: its corners' flat rest state in their panels' grain frame (what it simulates from)
+        return np.asarray(garment.face_uv, dtype=np.float64)
+    ruv = np.asarray(garment.rest_uv, dtype=np.float64)
     if ruv.shape == (len(faces), 3, 2):
         return ruv
     if ruv.ndim == 2 and ruv.shape == (len(garment.vertices), 2):

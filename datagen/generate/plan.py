@@ -114,7 +114,8 @@ class Plan:
             from datagen.generate.garments import build_garment
 
             b = self.bodies.index(self.instances[g][1])
-            cache[g] = build_garment(self.entry(g), self.body_model, self.betas[b], self.config.garment_edge_length)
+            cache[g] = build_garment(self.entry(g), self.body_model, self.betas[b], self.config.garment_edge_length,
+                                     self.run_config)
         return cache[g]
 
     def entry(self, g: int):
