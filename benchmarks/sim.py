@@ -208,8 +208,11 @@ def profile(args) -> None:
 
 
 def prepare_runs(args) -> None:
-    """Scenes for the long-run check: each garment on the regular body doing each motion."""
+    """Scenes for the long-run check: each garment on the regular body doing each motion. A garment is
+    a shell type (``tshirt``) or a config entry (``pattern:top:0``: a pattern garment, sewn here on the
+    CPU with the production settings before it is pickled)."""
     from datagen.body.cache import default_body
+    from datagen.generate.garments import build_garment, parse_garment_entry
     from datagen.body.shapes import resolve_betas
     from datagen.garment.types import make_garment
     from datagen.motion.library import make_motion
@@ -221,7 +224,10 @@ def prepare_runs(args) -> None:
              else resolve_betas(model, body=body))[0]
     scenes, names = [], []
     for kind in args.garments.split(","):
-        g = make_garment(kind, model, betas, seed=args.garment_seed, target_edge_length=args.edge)
+        if ":" in kind:
+            g = build_garment(parse_garment_entry(kind), model, betas, args.edge, RunConfig())
+        else:
+            g = make_garment(kind, model, betas, seed=args.garment_seed, target_edge_length=args.edge)
         for label in args.motions.split(","):
             motion = make_motion(label, seed=args.motion_seed, frames=RunConfig().motion_frames(args.frames, 30.0))
             scenes.append(Scene(garment=g, body=model, betas=betas, motion=motion))

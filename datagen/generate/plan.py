@@ -142,6 +142,37 @@ class Plan:
 # --------------------------------------------------------------------------------- static groups
 
 
+_SEW_PLAN: dict = {}
+
+
+def _sew_worker_init(config) -> None:
+    _SEW_PLAN["plan"] = Plan(config)
+
+
+def _sew_one(g: int) -> int:
+    _SEW_PLAN["plan"].garment(g)  # sewn into the garment cache, where the main process reads it
+    return g
+
+
+def sew_patterns(plan: Plan, workers: int | None) -> None:
+    """Sew the plan's pattern garment instances not in the garment cache yet, ``workers`` processes at
+    once (a design sews in a minute or two on one CPU core; one by one they would hold up the start).
+    A design that cannot be sewn is refused here, before any scene is simulated."""
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
+    todo = [g for g in range(len(plan.instances)) if plan.entry(g).is_pattern and not plan.has_garment(g)]
+    workers = min(len(todo), workers if workers is not None else 1)
+    if len(todo) < 2 or workers < 2:
+        return  # built one by one where they are first needed
+    t0 = time.perf_counter()
+    log.info("sewing %d pattern garment instances on %d processes", len(todo), workers)
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_sew_worker_init,
+                             initargs=(plan.config,)) as pool:
+        for done, g in enumerate(pool.map(_sew_one, todo), 1):
+            log.info("sewn %d/%d (%s on %s), %.0f s so far", done, len(todo), *plan.instances[g], time.perf_counter() - t0)
+
+
 def static_groups(plan: Plan, device: str | None = None) -> dict[str, tuple[dict, dict | None]]:
     """group -> (arrays, names) for every static group of the store (the fit group's diagnostics are
     :meth:`Plan.fit_diagnostics` once this has run). The garments are settled at rest on ``device``

@@ -28,7 +28,7 @@ from pathlib import Path
 from datagen.errors import InputError
 from datagen.generate.config import DatasetConfig, parse_garment
 from datagen.generate.devices import parse_devices, run_on_devices
-from datagen.generate.plan import Plan, open_writer, static_groups
+from datagen.generate.plan import Plan, open_writer, sew_patterns, static_groups
 from datagen.generate.samples import default_workers, simulate_samples
 
 log = logging.getLogger(__name__)
@@ -170,6 +170,7 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
         return {"samples": plan.sample_count, "simulated": 0, "seconds": 0.0, "complete": True}
     t0 = time.perf_counter()
     if writer.missing_static():
+        sew_patterns(plan, default_workers() if workers is None else workers)
         for group, (arrays, names) in static_groups(plan, parse_devices(device)[0]).items():
             writer.stage_static(group, arrays, names=names,
                                 **({"diagnostics": plan.fit_diagnostics} if group == "fit" else {}))
