@@ -92,7 +92,7 @@ class Substep:
 
     x_prev: wp.array(dtype=wp.vec3)  # [n] positions at the substep's start
     x_det: wp.array(dtype=wp.vec3)  # [n] positions at the last cloth-cloth detection
-    bound_end: wp.array(dtype=wp.vec3)  # [n] x_det carried by the body or inertia (kernels.carry_bound)
+    bound_end: wp.array(dtype=wp.vec3)  # [n] x_det carried by the body (kernels.carry_bound)
     inertia_target: wp.array(dtype=wp.vec3)  # [n] the inertial prediction y
     bound: wp.array(dtype=float)  # [n] how far a vertex may move off the segment x_det-bound_end
     slip: wp.array(dtype=float)  # [n] each vertex's slide along the body over the last substep

@@ -29,9 +29,9 @@ same-coloured vertices), so the result does not depend on the order of threads. 
 the global step's moves of each vertex between two detections are bounded by ``bound_fraction`` x
 its distance to the nearest cloth primitive found at detection (Chen et al. 2024, §3.6
 conservative bounds) when that primitive is within the search distance, so the iterations cannot
-carry the cloth through itself. The bound is measured from the segment along which the body, or
-the vertex's own inertia, carries it over the substep (:func:`carry_bound`, :func:`bounded_move`):
-it holds back how far the iterations move a vertex, not how fast cloth may follow a limb.
+carry the cloth through itself. The bound is measured from the segment along which the body
+carries the vertex over the substep (:func:`carry_bound`, :func:`bounded_move`): it holds back how
+far the iterations move a vertex, not how fast cloth may follow a limb.
 """
 
 from __future__ import annotations
@@ -117,7 +117,7 @@ def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: w
 @wp.func
 def bounded_move(new: wp.vec3, start: wp.vec3, end: wp.vec3, bound: float) -> wp.vec3:
     """``new`` kept within ``bound`` [m] of the segment from ``start`` (a vertex's position at the
-    last cloth-cloth detection) to ``end`` (where the body or its inertia carries it by the
+    last cloth-cloth detection) to ``end`` (where the body carries it by the
     substep's end: :func:`carry_bound`): moved onto that distance towards the segment's nearest
     point when farther. With ``end == start`` the bound is the ball about ``start``, computed as it
     always was (bitwise)."""
@@ -139,35 +139,33 @@ CARRY_FULL = wp.constant(0.5)
 
 
 @wp.kernel
-def carry_bound(x_det: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
-                inertia_target: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32),
+def carry_bound(x_det: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32),
                 point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
-                body_disp: wp.array2d(dtype=wp.vec3), query: float, bound: wp.array(dtype=float),
-                active: wp.array(dtype=wp.int32), bound_end: wp.array(dtype=wp.vec3)):
+                body_disp: wp.array2d(dtype=wp.vec3), query: float, active: wp.array(dtype=wp.int32),
+                bound_end: wp.array(dtype=wp.vec3)):
     """The far end of each vertex's bound segment (``bound_end`` [n]; :func:`bounded_move`): the
     vertex's position at the last detection ``x_det`` plus what is left of its carry over the
     substep (the carry less how far the vertex has already moved along it since the substep began
-    at ``x_prev``). The carry is
-
-    - the move over the substep of the body part nearest it (``body_disp`` at its plane), for a
-      vertex that was within ``CARRY_FULL`` x ``query`` [m] of that plane before the move, fading
-      to nothing at ``query``;
-    - for any other vertex, its inertial move ``inertia_target - x_prev`` when that is longer than
-      its bound (slower cloth keeps the bound of before: a ball about ``x_det``).
+    at ``x_prev``). The carry is the move over the substep of the body part nearest the vertex
+    (``body_disp`` at its plane), in full for a vertex that was within ``CARRY_FULL`` x ``query``
+    [m] of that plane before the move, fading to nothing at ``query``.
 
     Why: the bound is ``bound_fraction`` x 6 mm at least, per detection, for cloth near other cloth:
     with 4 detections a substep and 10 substeps a frame, measured from ``x_det`` alone it held such
     cloth to 3.24 m/s. A walking ankle reaches 3.9 m/s: the bound held the bunched hem of a trouser
     leg back while the shin passed into it, and the projection then put the hem's vertices out on
     opposite sides of the shin (a 305 % tear, issue 66). The bound is there to keep the iterations
-    from jumping cloth through cloth, not to slow cloth down: along the segment the body or its own
-    momentum carries a vertex it may go as far as they take it, and no farther than the bound off
-    it. The segment allows the move, it does not force it: a ball about the carried end did, and in
+    from jumping cloth through cloth, not to hold cloth back from a limb: along the segment the body
+    carries a vertex it may go as far as the body takes it, and no farther than the bound off it.
+    The segment allows the move, it does not force it: a ball about the carried end did, and in
     ``tests/sim/test_fast_limb.py`` carried along each body face's normal the cloth in front of the
     limb was pulled apart at the edges between faces (1,218 %), carried along the limb's move the
     cloth the carry reached was pulled away from the cloth it did not (1,860 %); with the segment,
-    36 %. A vertex the body does not move and that moves slower than its bound keeps exactly the
-    bound of before (``bound_end == x_det``), so static-body scenes of slow cloth do not change."""
+    36 %. The vertex's own inertia does not carry it: a segment along the inertial move of every
+    vertex faster than its bound let a 60 cm square folding over a sphere at rest cross itself
+    (``test_cloth_folding_on_itself_does_not_self_intersect``, 10 substeps). A vertex the body does
+    not move keeps exactly the bound of before (``bound_end == x_det``), so a scene with a body at
+    rest does not change at all."""
     i = wp.tid()
     start = x_det[i]
     end = start
@@ -181,16 +179,10 @@ def carry_bound(x_det: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                 if own < 0 or d < nearest:
                     own = p
                     nearest = d
-        w = float(0.0)
         if own >= 0:
             disp = body_disp[i, own]
             before = wp.dot(x_prev[i] - point[i, own], normal[i, own]) + wp.dot(disp, normal[i, own])
-            w = wp.clamp((query - wp.abs(before)) / ((1.0 - CARRY_FULL) * query), 0.0, 1.0)
-            carry = disp * w
-        if w == 0.0:
-            inertial = inertia_target[i] - x_prev[i]
-            if wp.length(inertial) > bound[i]:
-                carry = inertial
+            carry = disp * wp.clamp((query - wp.abs(before)) / ((1.0 - CARRY_FULL) * query), 0.0, 1.0)
         L = wp.length(carry)
         if L > 0.0:
             along = carry / L

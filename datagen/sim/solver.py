@@ -152,7 +152,7 @@ class SolverVBD:
             self.body_start = wp.clone(m.body_rest)
             self.body_prev_sub, self.body_sub = z3(nb), wp.clone(m.body_rest)
             self.x_det = wp.clone(m.rest_positions)
-            self.bound_end = wp.clone(m.rest_positions)  # x_det carried by the body or inertia (kernels.carry_bound)
+            self.bound_end = wp.clone(m.rest_positions)  # x_det carried by the body (kernels.carry_bound)
             self.edge_lo, self.edge_hi = z3(ne), z3(ne)
             wp.launch(D.edge_bounds, ne, inputs=[m.rest_positions, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
             self.face_lo, self.face_hi = z3(nf), z3(nf)
@@ -411,8 +411,8 @@ class SolverVBD:
             wp.launch(D.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
         wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.self_contact.bound_fraction, c.self_contact.bound_floor,
                                               self.bound])
-        wp.launch(self.K.carry_bound, n, inputs=[self.x_det, self.x_prev, self.y, self.body_has, self.body_point,
-                                                 self.body_normal, self.body_disp, c.body.query, self.bound, m.active,
+        wp.launch(self.K.carry_bound, n, inputs=[self.x_det, self.x_prev, self.body_has, self.body_point,
+                                                 self.body_normal, self.body_disp, c.body.query, m.active,
                                                  self.bound_end])
 
     def _untangle(self, x) -> None:

@@ -9,9 +9,8 @@ an H200 (frame 111) and by 464 % on the CPU alone (frame 80). This scene shows t
 frames: a 4 cm limb moving at 4 m/s into two cotton layers 3 mm apart (706 % with the bound about
 the detection's position, 33.7 % with 20 substeps).
 
-The bound is now measured from the segment along which the body or the vertex's own inertia
-carries it over the substep (``kernels.carry_bound``): the layers ride the limb (36 % here, no
-vertex inside it).
+The bound is now measured from the segment along which the body carries the vertex over the
+substep (``kernels.carry_bound``): the layers ride the limb (38 % here, no vertex inside it).
 """
 
 import numpy as np

@@ -1,7 +1,7 @@
 """The move bound's segment (issue 66): ``kernels.bounded_move`` and ``kernels.carry_bound``.
 
 The sweeps, the global step, the initial guess and the Chebyshev step keep each vertex within its
-bound of the segment from its detection position to where the body or its inertia carries it.
+bound of the segment from its detection position to where the body carries it.
 Where nothing carries it the segment is a point and the bound must be the ball of before, bit for
 bit (static-body scenes keep their positions); where the body carries it, the whole segment is
 allowed and nothing off it by more than the bound.
@@ -62,7 +62,7 @@ def test_a_carried_vertex_may_ride_its_segment_and_no_farther_off_it_than_the_bo
     np.testing.assert_allclose(out[4], [0.0, 0.0, -b], atol=1e-7)
 
 
-def _carry(x_det, x_prev, y, disp, plane_point, normal, bound, query=0.03):
+def _carry(x_det, x_prev, disp, plane_point, normal, query=0.03):
     wp.init()
     n = len(x_det)
     v3 = lambda a: wp.array(np.asarray(a, np.float32).reshape(-1, 3), dtype=wp.vec3, device="cpu")  # noqa: E731
@@ -71,29 +71,24 @@ def _carry(x_det, x_prev, y, disp, plane_point, normal, bound, query=0.03):
     pts = [np.zeros(3) if p is None else p for p in plane_point]
     end = wp.zeros(n, dtype=wp.vec3, device="cpu")
     wp.launch(K.carry_bound, n, device="cpu", inputs=[
-        v3(x_det), v3(x_prev), v3(y), has, p2(pts), p2(normal), p2(disp), query,
-        wp.array(np.asarray(bound, np.float32), dtype=float, device="cpu"),
+        v3(x_det), v3(x_prev), has, p2(pts), p2(normal), p2(disp), query,
         wp.array(np.ones(n, np.int32), dtype=wp.int32, device="cpu"), end])
     return end.numpy()
 
 
-def test_the_segment_is_the_body_s_move_near_it_and_fast_inertia_away_from_it():
+def test_the_segment_is_the_body_s_move_and_nothing_where_the_body_does_not_move():
     z, up = np.zeros(3), np.array([0.0, 0.0, 1.0])
-    x = np.array([[0.0, 0.0, 0.005]] * 5)
-    disp = np.array([[0.0, 0.0, 0.0133]] * 5)
+    x = np.array([[0.0, 0.0, 0.005]] * 4)
+    disp = np.array([[0.0, 0.0, 0.0133]] * 4)  # 4 m/s at 10 substeps of 1/30 s
     disp[1] = 0.0  # a body at rest
-    y = x.copy()
-    y[2, 2] += 0.001  # slow cloth, far from the body
-    y[3, 2] += 0.012  # fast cloth, far from the body
-    planes = [z + disp[0], z, None, None, z + disp[0]]
-    end = _carry(x, x, y, disp, planes, [up] * 5, np.full(5, 0.0027))
+    planes = [z + disp[0], z, None, z + disp[0]]
+    end = _carry(x, x, disp, planes, [up] * 4)
     np.testing.assert_allclose(end[0], x[0] + disp[0], atol=1e-7)  # carried by the limb
-    assert np.array_equal(end[1], x[1].astype(np.float32))  # a body at rest: the ball of before
-    assert np.array_equal(end[2], x[2].astype(np.float32))  # slower than the bound: the ball of before
-    np.testing.assert_allclose(end[3], y[3], atol=1e-7)  # faster: carried by its inertia
+    assert np.array_equal(end[1], x[1].astype(np.float32))  # a body at rest: the ball of before, bit for bit
+    assert np.array_equal(end[2], x[2].astype(np.float32))  # no body near: the ball of before
     # a later detection in the substep, the vertex already 10 mm along: only the 3.3 mm left
-    later = x[4] + [0.001, 0.0, 0.010]
-    end = _carry(later[None], x[4][None], x[4][None], disp[4][None], [planes[4]], [up], [0.0027])
+    later = x[3] + [0.001, 0.0, 0.010]
+    end = _carry(later[None], x[3][None], disp[3][None], [planes[3]], [up])
     np.testing.assert_allclose(end[0], later + [0.0, 0.0, 0.0033], atol=1e-6)
 
 
@@ -102,5 +97,5 @@ def test_the_body_s_carry_fades_from_half_the_query_to_its_edge(distance, share)
     up = np.array([0.0, 0.0, 1.0])
     x = np.array([[0.0, 0.0, distance]])
     disp = np.array([[0.0, 0.0, 0.002]])  # 2 mm towards the cloth
-    end = _carry(x, x, x, disp, [disp[0]], [up], [0.001])
+    end = _carry(x, x, disp, [disp[0]], [up])
     np.testing.assert_allclose(end[0], x[0] + disp[0] * share, atol=1e-6)
