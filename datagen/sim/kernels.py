@@ -133,6 +133,30 @@ def bounded_move(new: wp.vec3, start: wp.vec3, end: wp.vec3, bound: float) -> wp
     return new
 
 
+@wp.kernel
+def global_bounds(min_dist: wp.array(dtype=float), fraction: float, bound: wp.array(dtype=float)):
+    """The global step's move bound [m]: ``fraction`` x the distance to the nearest non-neighbouring
+    cloth primitive (``detection_kernels.detect_*``'s ``min_dist``), without the sweeps' floor.
+
+    The sweeps' bound counts a distance below ``bound_floor`` (6 mm) as the floor, because the
+    cloth-cloth contact forces in the sweeps keep such pairs apart. The global step has no
+    cloth-cloth contact, nor has the initial guess that it starts from (:func:`initial_guess`): with
+    the floor, two layers 3-4.5 mm apart (a pair in contact) could each move 2.7 mm towards the
+    other in them and cross. In ``small``'s scene 34 (pants:0 squatting, the
+    front panels folding under the belly as the hip flexes past 74 degrees) every new crossing of
+    frames 81-82 appeared in the global step (238 edge-triangle pairs 2.8-4.5 mm apart before it,
+    none in the sweeps, the projection or the untangling), the sweeps undid most of them and
+    left 4 and 8 at the frames' ends, 81 at frame 90 (the gate allows 50). Unfloored, two primitives
+    close at most ``2 x fraction`` of their distance in the global step."""
+    i = wp.tid()
+    bound[i] = fraction * min_dist[i]
+
+
+CARRY_MIN = wp.constant(1.0e-6)
+"""A body part's move in a substep [m] below which it carries nothing (:func:`carry_bound`): the two
+poses of a body at rest that a substep interpolates differ by float rounding (about 1e-8 m), and a
+carry that small would only change the bits of a scene whose body does not move."""
+
 CARRY_FULL = wp.constant(0.5)
 """The share of the body query within which a body part's move carries a vertex's bound in full
 (:func:`carry_bound`); from there to the query's edge the carry fades to nothing."""
@@ -181,8 +205,9 @@ def carry_bound(x_det: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3),
                     nearest = d
         if own >= 0:
             disp = body_disp[i, own]
-            before = wp.dot(x_prev[i] - point[i, own], normal[i, own]) + wp.dot(disp, normal[i, own])
-            carry = disp * wp.clamp((query - wp.abs(before)) / ((1.0 - CARRY_FULL) * query), 0.0, 1.0)
+            if wp.length(disp) > CARRY_MIN:
+                before = wp.dot(x_prev[i] - point[i, own], normal[i, own]) + wp.dot(disp, normal[i, own])
+                carry = disp * wp.clamp((query - wp.abs(before)) / ((1.0 - CARRY_FULL) * query), 0.0, 1.0)
         L = wp.length(carry)
         if L > 0.0:
             along = carry / L
@@ -200,8 +225,9 @@ def initial_guess(x_det: wp.array(dtype=wp.vec3), bound_end: wp.array(dtype=wp.v
                   active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
     """Start the iterations at y with only the part of gravity the vertex fell with over the last
     substep (VBD's adaptive initialisation, Chen et al. 2024 §3.4: ã = clamp(a·ĝ, 0, |g|) ĝ with
-    a = (v - v_old)/h), clipped to each vertex's conservative bound (``bound`` about the segment
-    ``x_det``-``bound_end``: :func:`bounded_move`).
+    a = (v - v_old)/h), clipped to each vertex's conservative bound (``bound``: the global step's,
+    without the floor, :func:`global_bounds`; about the segment ``x_det``-``bound_end``:
+    :func:`bounded_move`): no cloth-cloth contact acts on the guess either.
 
     Starting at y drops every hanging vertex by g h² that the sweeps must carry back through the
     membrane; at 20 sweeps they had not, and the pull of the unconverged cloth slid a pair of

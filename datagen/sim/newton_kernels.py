@@ -406,7 +406,8 @@ def cg_direction(z: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), rz
 @wp.kernel
 def apply_step(d: wp.array(dtype=wp.vec3), x_det: wp.array(dtype=wp.vec3), bound_end: wp.array(dtype=wp.vec3),
                bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
-    """x += d, each vertex kept within its conservative bound of the segment from its detection
+    """x += d, each vertex kept within its conservative bound (``bound``: the global step's, without
+    the sweeps' floor: :func:`datagen.sim.kernels.global_bounds`) of the segment from its detection
     position to where the body carries it (:func:`datagen.sim.kernels.bounded_move`)."""
     i = wp.tid()
     if active[i] == 0:

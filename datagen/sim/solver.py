@@ -121,6 +121,7 @@ class SolverVBD:
             self.colours = [wp.array(np.asarray(c, dtype=np.int32), dtype=wp.int32) for c in cols]
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
+            self.bound_global = wp.zeros(n, dtype=float)  # the global step's, without the floor (kernels.global_bounds)
             self.min_dist = wp.zeros(n, dtype=float)
             self.friction_used = wp.zeros(n, dtype=float)
             self.slip = wp.zeros(n, dtype=float)
@@ -411,6 +412,7 @@ class SolverVBD:
             wp.launch(D.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
         wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.self_contact.bound_fraction, c.self_contact.bound_floor,
                                               self.bound])
+        wp.launch(self.K.global_bounds, n, inputs=[self.min_dist, c.self_contact.bound_fraction, self.bound_global])
         wp.launch(self.K.carry_bound, n, inputs=[self.x_det, self.x_prev, self.body_has, self.body_point,
                                                  self.body_normal, self.body_disp, c.body.query, m.active,
                                                  self.bound_end])
@@ -485,7 +487,7 @@ class SolverVBD:
             rz, rz_new = rz_new, rz
             for probe in probes:
                 probe.global_residual(self, it + 1, rz, it + 1 == c.steps.global_iterations)
-        wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound_end, self.bound, m.active, x])
+        wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound_end, self.bound_global, m.active, x])
 
     def _solve_colour(self, col, x, out) -> None:
         """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``),
@@ -547,7 +549,7 @@ class SolverVBD:
                 wp.copy(self.x_det, self.x_prev)
                 self._detect_self()
                 wp.launch(K.initial_guess, n, inputs=[self.x_det, self.bound_end, self.y, v, self.v_old, wp.vec3(*c.gravity), h,
-                                                     self.body_lambda, self.bound, m.active, x])
+                                                     self.body_lambda, self.bound_global, m.active, x])
                 if c.steps.global_iterations:
                     self._global_step(x, h)
                 wp.copy(self.x_nm1, x)
