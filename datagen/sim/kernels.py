@@ -140,9 +140,10 @@ def global_bounds(min_dist: wp.array(dtype=float), fraction: float, bound: wp.ar
 
     The sweeps' bound counts a distance below ``bound_floor`` (6 mm) as the floor, because the
     cloth-cloth contact forces in the sweeps keep such pairs apart. The global step has no
-    cloth-cloth contact, nor has the initial guess that it starts from (:func:`initial_guess`): with
-    the floor, two layers 3-4.5 mm apart (a pair in contact) could each move 2.7 mm towards the
-    other in them and cross. In ``small``'s scene 34 (pants:0 squatting, the
+    cloth-cloth contact: with the floor, two layers 3-4.5 mm apart (a pair in contact) could each
+    move 2.7 mm towards the other in it and cross. (The initial guess keeps the sweeps' bound:
+    without the floor there too, the two layers of ``tests/sim/test_fast_limb.py`` could not keep
+    up with the limb, 735 %.) In ``small``'s scene 34 (pants:0 squatting, the
     front panels folding under the belly as the hip flexes past 74 degrees) every new crossing of
     frames 81-82 appeared in the global step (238 edge-triangle pairs 2.8-4.5 mm apart before it,
     none in the sweeps, the projection or the untangling), the sweeps undid most of them and
@@ -225,9 +226,8 @@ def initial_guess(x_det: wp.array(dtype=wp.vec3), bound_end: wp.array(dtype=wp.v
                   active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
     """Start the iterations at y with only the part of gravity the vertex fell with over the last
     substep (VBD's adaptive initialisation, Chen et al. 2024 §3.4: ã = clamp(a·ĝ, 0, |g|) ĝ with
-    a = (v - v_old)/h), clipped to each vertex's conservative bound (``bound``: the global step's,
-    without the floor, :func:`global_bounds`; about the segment ``x_det``-``bound_end``:
-    :func:`bounded_move`): no cloth-cloth contact acts on the guess either.
+    a = (v - v_old)/h), clipped to each vertex's conservative bound (``bound`` about the segment
+    ``x_det``-``bound_end``: :func:`bounded_move`).
 
     Starting at y drops every hanging vertex by g h² that the sweeps must carry back through the
     membrane; at 20 sweeps they had not, and the pull of the unconverged cloth slid a pair of

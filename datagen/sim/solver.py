@@ -549,7 +549,7 @@ class SolverVBD:
                 wp.copy(self.x_det, self.x_prev)
                 self._detect_self()
                 wp.launch(K.initial_guess, n, inputs=[self.x_det, self.bound_end, self.y, v, self.v_old,
-                                                     wp.vec3(*c.gravity), h, self.body_lambda, self.bound_global,
+                                                     wp.vec3(*c.gravity), h, self.body_lambda, self.bound,
                                                      m.active, x])
                 if c.steps.global_iterations:
                     self._global_step(x, h)
