@@ -121,6 +121,10 @@ CASES: tuple[Case, ...] = (
          summary="two stores array by array: bitwise equal or the largest difference (exit 1 if any differs)"),
     Case(name="export", module="benchmarks.export_usd", needs="usd-core (pip install -e '.[usd]')",
          summary="writing a long dense animation to .usd/.usda: seconds, MB, frames/s, validation, read-back"),
+    # the README
+    Case(name="readme-figures", module="benchmarks.readme_figures",
+         summary="every figure README.md quotes, re-measured by its command on this machine (--device cpu|cuda), "
+                 "beside README's value; a figure that moved is flagged"),
 )
 """Every case, in the order ``--list`` prints them."""
 

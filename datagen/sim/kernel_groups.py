@@ -92,8 +92,9 @@ class Substep:
 
     x_prev: wp.array(dtype=wp.vec3)  # [n] positions at the substep's start
     x_det: wp.array(dtype=wp.vec3)  # [n] positions at the last cloth-cloth detection
+    bound_end: wp.array(dtype=wp.vec3)  # [n] x_det carried by the body (kernels.carry_bound)
     inertia_target: wp.array(dtype=wp.vec3)  # [n] the inertial prediction y
-    bound: wp.array(dtype=float)  # [n] how far a vertex may move from x_det
+    bound: wp.array(dtype=float)  # [n] how far a vertex may move off the segment x_det-bound_end
     slip: wp.array(dtype=float)  # [n] each vertex's slide along the body over the last substep
     h: float  # the substep [s]
     eps_u: float  # the friction's smoothing distance, friction_velocity x h

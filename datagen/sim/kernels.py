@@ -25,12 +25,13 @@ Energies (per element, SI units; see ``docs/simulator.md``):
 Each vertex takes one Newton step on its local energy per colour sweep (Chen et al. 2024,
 "Vertex Block Descent", SIGGRAPH), with Gauss-Seidel order across colours. Within a colour every
 vertex reads the positions of the start of the sweep (a Jacobi step for the contacts that couple
-same-coloured vertices), so the result does not depend on the order of threads. Every vertex's
-move in a substep is bounded by 0.4x its distance to the nearest cloth primitive found at
-detection (Chen et al. 2024, §3.6 conservative bounds) when that primitive is within the search
-distance, so the cloth cannot pass through itself unless two primitives farther apart than the
-search distance close it in one substep (a relative speed above 0.6 x search distance / substep;
-1.8 m/s at the defaults).
+same-coloured vertices), so the result does not depend on the order of threads. The sweeps' and
+the global step's moves of each vertex between two detections are bounded by ``bound_fraction`` x
+its distance to the nearest cloth primitive found at detection (Chen et al. 2024, §3.6
+conservative bounds) when that primitive is within the search distance, so the iterations cannot
+carry the cloth through itself. The bound is measured from the segment along which the body
+carries the vertex over the substep (:func:`carry_bound`, :func:`bounded_move`): it holds back how
+far the iterations move a vertex, not how fast cloth may follow a limb.
 """
 
 from __future__ import annotations
@@ -113,14 +114,120 @@ def forward_step(x: wp.array(dtype=wp.vec3), v: wp.array(dtype=wp.vec3), mass: w
     inertia_target[i] = x[i] + (v[i] + a * h) * h
 
 
+@wp.func
+def bounded_move(new: wp.vec3, start: wp.vec3, end: wp.vec3, bound: float) -> wp.vec3:
+    """``new`` kept within ``bound`` [m] of the segment from ``start`` (a vertex's position at the
+    last cloth-cloth detection) to ``end`` (where the body carries it by the
+    substep's end: :func:`carry_bound`): moved onto that distance towards the segment's nearest
+    point when farther. With ``end == start`` the bound is the ball about ``start``, computed as it
+    always was (bitwise)."""
+    q = start
+    seg = end - start
+    s2 = wp.dot(seg, seg)
+    if s2 > 0.0:
+        q = start + seg * wp.clamp(wp.dot(new - start, seg) / s2, 0.0, 1.0)
+    move = new - q
+    L = wp.length(move)
+    if L > bound:
+        return q + move * (bound / L)
+    return new
+
+
 @wp.kernel
-def initial_guess(x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtype=wp.vec3),
+def global_bounds(min_dist: wp.array(dtype=float), fraction: float, bound: wp.array(dtype=float)):
+    """The global step's move bound [m]: ``fraction`` x the distance to the nearest non-neighbouring
+    cloth primitive (``detection_kernels.detect_*``'s ``min_dist``), without the sweeps' floor.
+
+    The sweeps' bound counts a distance below ``bound_floor`` (6 mm) as the floor, because the
+    cloth-cloth contact forces in the sweeps keep such pairs apart. The global step has no
+    cloth-cloth contact: with the floor, two layers 3-4.5 mm apart (a pair in contact) could each
+    move 2.7 mm towards the other in it and cross. (The initial guess keeps the sweeps' bound:
+    without the floor there too, the two layers of ``tests/sim/test_fast_limb.py`` could not keep
+    up with the limb, 735 %.) In ``small``'s scene 34 (pants:0 squatting, the
+    front panels folding under the belly as the hip flexes past 74 degrees) every new crossing of
+    frames 81-82 appeared in the global step (238 edge-triangle pairs 2.8-4.5 mm apart before it,
+    none in the sweeps, the projection or the untangling), the sweeps undid most of them and
+    left 4 and 8 at the frames' ends, 81 at frame 90 (the gate allows 50). Unfloored, two primitives
+    close at most ``2 x fraction`` of their distance in the global step."""
+    i = wp.tid()
+    bound[i] = fraction * min_dist[i]
+
+
+CARRY_MIN = wp.constant(1.0e-6)
+"""A body part's move in a substep [m] below which it carries nothing (:func:`carry_bound`): the two
+poses of a body at rest that a substep interpolates differ by float rounding (about 1e-8 m), and a
+carry that small would only change the bits of a scene whose body does not move."""
+
+CARRY_FULL = wp.constant(0.5)
+"""The share of the body query within which a body part's move carries a vertex's bound in full
+(:func:`carry_bound`); from there to the query's edge the carry fades to nothing."""
+
+
+@wp.kernel
+def carry_bound(x_det: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec3), has: wp.array2d(dtype=wp.int32),
+                point: wp.array2d(dtype=wp.vec3), normal: wp.array2d(dtype=wp.vec3),
+                body_disp: wp.array2d(dtype=wp.vec3), query: float, active: wp.array(dtype=wp.int32),
+                bound_end: wp.array(dtype=wp.vec3)):
+    """The far end of each vertex's bound segment (``bound_end`` [n]; :func:`bounded_move`): the
+    vertex's position at the last detection ``x_det`` plus what is left of its carry over the
+    substep (the carry less how far the vertex has already moved along it since the substep began
+    at ``x_prev``). The carry is the move over the substep of the body part nearest the vertex
+    (``body_disp`` at its plane), in full for a vertex that was within ``CARRY_FULL`` x ``query``
+    [m] of that plane before the move, fading to nothing at ``query``.
+
+    Why: the bound is ``bound_fraction`` x 6 mm at least, per detection, for cloth near other cloth:
+    with 4 detections a substep and 10 substeps a frame, measured from ``x_det`` alone it held such
+    cloth to 3.24 m/s. A walking ankle reaches 3.9 m/s: the bound held the bunched hem of a trouser
+    leg back while the shin passed into it, and the projection then put the hem's vertices out on
+    opposite sides of the shin (a 305 % tear, issue 66). The bound is there to keep the iterations
+    from jumping cloth through cloth, not to hold cloth back from a limb: along the segment the body
+    carries a vertex it may go as far as the body takes it, and no farther than the bound off it.
+    The segment allows the move, it does not force it: a ball about the carried end did, and in
+    ``tests/sim/test_fast_limb.py`` carried along each body face's normal the cloth in front of the
+    limb was pulled apart at the edges between faces (1,218 %), carried along the limb's move the
+    cloth the carry reached was pulled away from the cloth it did not (1,860 %); with the segment,
+    36 %. The vertex's own inertia does not carry it: a segment along the inertial move of every
+    vertex faster than its bound let a 60 cm square folding over a sphere at rest cross itself
+    (``test_cloth_folding_on_itself_does_not_self_intersect``, 10 substeps). A vertex the body does
+    not move keeps exactly the bound of before (``bound_end == x_det``), so a scene with a body at
+    rest does not change at all."""
+    i = wp.tid()
+    start = x_det[i]
+    end = start
+    if active[i] != 0:
+        carry = wp.vec3(0.0)
+        own = int(-1)
+        nearest = float(0.0)
+        for p in range(has.shape[1]):
+            if has[i, p] == 1:
+                d = wp.length(x_prev[i] - point[i, p])
+                if own < 0 or d < nearest:
+                    own = p
+                    nearest = d
+        if own >= 0:
+            disp = body_disp[i, own]
+            if wp.length(disp) > CARRY_MIN:
+                before = wp.dot(x_prev[i] - point[i, own], normal[i, own]) + wp.dot(disp, normal[i, own])
+                carry = disp * wp.clamp((query - wp.abs(before)) / ((1.0 - CARRY_FULL) * query), 0.0, 1.0)
+        L = wp.length(carry)
+        if L > 0.0:
+            along = carry / L
+            left = L - wp.dot(start - x_prev[i], along)
+            if left > 0.0:
+                end = start + along * left
+    bound_end[i] = end
+
+
+@wp.kernel
+def initial_guess(x_det: wp.array(dtype=wp.vec3), bound_end: wp.array(dtype=wp.vec3),
+                  inertia_target: wp.array(dtype=wp.vec3),
                   v: wp.array(dtype=wp.vec3), v_old: wp.array(dtype=wp.vec3), gravity: wp.vec3, h: float,
                   body_lambda: wp.array2d(dtype=float), bound: wp.array(dtype=float),
                   active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
     """Start the iterations at y with only the part of gravity the vertex fell with over the last
     substep (VBD's adaptive initialisation, Chen et al. 2024 §3.4: ã = clamp(a·ĝ, 0, |g|) ĝ with
-    a = (v - v_old)/h), clipped to each vertex's conservative bound.
+    a = (v - v_old)/h), clipped to each vertex's conservative bound (``bound`` about the segment
+    ``x_det``-``bound_end``: :func:`bounded_move`).
 
     Starting at y drops every hanging vertex by g h² that the sweeps must carry back through the
     membrane; at 20 sweeps they had not, and the pull of the unconverged cloth slid a pair of
@@ -140,11 +247,14 @@ def initial_guess(x_prev: wp.array(dtype=wp.vec3), inertia_target: wp.array(dtyp
     if g2 > 0.0 and pressed <= 0.0:
         s = wp.clamp(wp.dot(v[i] - v_old[i], gravity) / (h * g2), 0.0, 1.0)
         guess = guess - gravity * ((1.0 - s) * h * h)
-    d = guess - x_prev[i]
-    L = wp.length(d)
-    if L > bound[i]:
-        d = d * (bound[i] / L)
-    x[i] = x_prev[i] + d
+    if bound_end[i] == x_det[i]:  # not carried: the bound about x_det (bitwise the clip of before)
+        d = guess - x_det[i]
+        L = wp.length(d)
+        if L > bound[i]:
+            d = d * (bound[i] / L)
+        x[i] = x_det[i] + d
+    else:
+        x[i] = bounded_move(guess, x_det[i], bound_end[i], bound[i])
 
 
 @wp.kernel
@@ -600,11 +710,11 @@ def copy_colour(colour_verts: wp.array(dtype=wp.int32), src: wp.array(dtype=wp.v
 
 @wp.kernel
 def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2: wp.array(dtype=wp.vec3),
-              x_det: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32),
-              omega: float, contacts: wp.array(dtype=wp.int32), skip_contacts: int,
+              x_det: wp.array(dtype=wp.vec3), bound_end: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float),
+              active: wp.array(dtype=wp.int32), omega: float, contacts: wp.array(dtype=wp.int32), skip_contacts: int,
               body_has: wp.array2d(dtype=wp.int32), skip_body: int):
     """Chebyshev semi-iterative acceleration of the sweeps (Wang 2015; VBD §3.5), bounded like the
-    sweeps themselves; keeps the last two iterates. With ``skip_contacts``, a vertex with
+    sweeps themselves (:func:`bounded_move`); keeps the last two iterates. With ``skip_contacts``, a vertex with
     cloth-cloth contacts (``contacts[i] > 0``) keeps its sweep's result; with ``skip_body``, one
     with a body contact (any ``body_has[i, part]``)."""
     i = wp.tid()
@@ -615,11 +725,7 @@ def chebyshev(x: wp.array(dtype=wp.vec3), x_nm1: wp.array(dtype=wp.vec3), x_nm2:
             if body_has[i, j] != 0:
                 accelerate = False
     if accelerate:
-        xi = x_nm2[i] + (xi - x_nm2[i]) * omega
-        move = xi - x_det[i]
-        L = wp.length(move)
-        if L > bound[i]:
-            xi = x_det[i] + move * (bound[i] / L)
+        xi = bounded_move(x_nm2[i] + (xi - x_nm2[i]) * omega, x_det[i], bound_end[i], bound[i])
         x[i] = xi
     x_nm2[i] = x_nm1[i]
     x_nm1[i] = xi

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import warp as wp
 
-from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, buckled_stiffness,
+from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, bounded_move, buckled_stiffness,
                                  friction_force_hessian, friction_limit, friction_part, hinge_gradients,
                                  lock_force_hessian, membrane_force_hessian, vec5)
 from datagen.sim.kernel_groups import BodyContact, Bending, Membrane, Substep, Vertices
@@ -412,15 +412,12 @@ def cg_direction(z: wp.array(dtype=wp.vec3), scene: wp.array(dtype=wp.int32), rz
 
 
 @wp.kernel
-def apply_step(d: wp.array(dtype=wp.vec3), x_det: wp.array(dtype=wp.vec3), bound: wp.array(dtype=float),
-               active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
-    """x += d, each vertex's move from its detection position kept within its conservative bound."""
+def apply_step(d: wp.array(dtype=wp.vec3), x_det: wp.array(dtype=wp.vec3), bound_end: wp.array(dtype=wp.vec3),
+               bound: wp.array(dtype=float), active: wp.array(dtype=wp.int32), x: wp.array(dtype=wp.vec3)):
+    """x += d, each vertex kept within its conservative bound (``bound``: the global step's, without
+    the sweeps' floor: :func:`datagen.sim.kernels.global_bounds`) of the segment from its detection
+    position to where the body carries it (:func:`datagen.sim.kernels.bounded_move`)."""
     i = wp.tid()
     if active[i] == 0:
         return
-    new = x[i] + d[i]
-    move = new - x_det[i]
-    L = wp.length(move)
-    if L > bound[i]:
-        new = x_det[i] + move * (bound[i] / L)
-    x[i] = new
+    x[i] = bounded_move(x[i] + d[i], x_det[i], bound_end[i], bound[i])

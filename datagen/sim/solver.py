@@ -133,6 +133,7 @@ class SolverVBD:
             self.colours = [wp.array(np.asarray(c, dtype=np.int32), dtype=wp.int32) for c in cols]
             self.x_nm1, self.x_nm2 = z3(n), z3(n)
             self.bound = wp.zeros(n, dtype=float)
+            self.bound_global = wp.zeros(n, dtype=float)  # the global step's, without the floor (kernels.global_bounds)
             self.min_dist = wp.zeros(n, dtype=float)
             self.friction_used = wp.zeros(n, dtype=float)
             self.slip = wp.zeros(n, dtype=float)
@@ -164,6 +165,7 @@ class SolverVBD:
             self.body_start = wp.clone(m.body_rest)
             self.body_prev_sub, self.body_sub = z3(nb), wp.clone(m.body_rest)
             self.x_det = wp.clone(m.rest_positions)
+            self.bound_end = wp.clone(m.rest_positions)  # x_det carried by the body (kernels.carry_bound)
             self.edge_lo, self.edge_hi = z3(ne), z3(ne)
             wp.launch(D.edge_bounds, ne, inputs=[m.rest_positions, m.edge_pairs, 0.0, self.edge_lo, self.edge_hi])
             self.face_lo, self.face_hi = z3(nf), z3(nf)
@@ -255,6 +257,7 @@ class SolverVBD:
         g.global_friction = GLOBAL_FRICTION[c.body.global_friction] if c.body.friction else 0
         g = self.substep = G.Substep()
         g.x_prev, g.x_det, g.inertia_target, g.bound, g.slip = self.x_prev, self.x_det, self.y, self.bound, self.slip
+        g.bound_end = self.bound_end
 
     def _allocate_contacts(self, cap: int) -> None:
         import warp as wp
@@ -395,7 +398,8 @@ class SolverVBD:
         return int(self.needed.numpy().max()) if self.config.self_contact.enabled else 0
 
     def _detect_self(self) -> None:
-        """Cloth-cloth pairs and every vertex's move bound at the positions ``x_det``."""
+        """Cloth-cloth pairs and every vertex's move bound at the positions ``x_det``, and the far
+        end of the segment it is measured from (``bound_end``: ``kernels.carry_bound``)."""
         import warp as wp
 
         D, m, c = self.D, self.model, self.config
@@ -428,6 +432,10 @@ class SolverVBD:
             wp.launch(D.count_needed, ne, inputs=[self.ee_count, self.needed, 2])
         wp.launch(D.finish_bounds, n, inputs=[self.min_dist, c.self_contact.bound_fraction, c.self_contact.bound_floor,
                                               self.bound])
+        wp.launch(self.K.global_bounds, n, inputs=[self.min_dist, c.self_contact.bound_fraction, self.bound_global])
+        wp.launch(self.K.carry_bound, n, inputs=[self.x_det, self.x_prev, self.body_has, self.body_point,
+                                                 self.body_normal, self.body_disp, c.body.query, m.active,
+                                                 self.bound_end])
 
     def _untangle(self, x) -> None:
         """``untangle_iterations`` steps of intersection contour minimisation at ``x``: every vertex of
@@ -500,7 +508,7 @@ class SolverVBD:
             rz, rz_new = rz_new, rz
             for probe in probes:
                 probe.global_residual(self, it + 1, rz, it + 1 == c.steps.global_iterations)
-        wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound, m.active, x])
+        wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound_end, self.bound_global, m.active, x])
 
     def _solve_colour(self, col, x, out) -> None:
         """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``),
@@ -562,8 +570,9 @@ class SolverVBD:
                         self.friction_used])
                 wp.copy(self.x_det, self.x_prev)
                 self._detect_self()
-                wp.launch(K.initial_guess, n, inputs=[self.x_det, self.y, v, self.v_old, wp.vec3(*c.gravity), h,
-                                                     self.body_lambda, self.bound, m.active, x])
+                wp.launch(K.initial_guess, n, inputs=[self.x_det, self.bound_end, self.y, v, self.v_old,
+                                                     wp.vec3(*c.gravity), h, self.body_lambda, self.bound,
+                                                     m.active, x])
                 if c.steps.global_iterations:
                     self._global_step(x, h)
                 wp.copy(self.x_nm1, x)
@@ -588,9 +597,10 @@ class SolverVBD:
                         # the substep ends on a plain sweep: an extrapolated last iterate would set the
                         # velocities (a cloth at rest on a plane crept 80 mm in 2 s at 15 iterations)
                         omega = 1.0
-                    wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound, m.active,
-                                                      omega, self.vt_count, int(not c.steps.chebyshev_contacts),
-                                                      self.body_has, int(not c.steps.chebyshev_body_contacts)])
+                    wp.launch(K.chebyshev, n, inputs=[x, self.x_nm1, self.x_nm2, self.x_det, self.bound_end,
+                                                      self.bound, m.active, omega, self.vt_count,
+                                                      int(not c.steps.chebyshev_contacts), self.body_has,
+                                                      int(not c.steps.chebyshev_body_contacts)])
                     for probe in probes:
                         probe.after_sweep(self, s, it, x, it == c.steps.iterations - 1)
                 wp.launch(K.body_contact_force, n, inputs=[x, self.body_has, self.body_point, self.body_normal,

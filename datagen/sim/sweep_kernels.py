@@ -21,7 +21,7 @@ import warp as wp
 
 from datagen.sim.detection_kernels import triangle_closest_bary
 from datagen.sim.kernel_groups import BodyContact, Bending, Membrane, SelfContact, Substep, Vertices
-from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, body_stick_slip,
+from datagen.sim.kernels import (bending_force_hessian, body_plane_force_hessian, body_stick_slip, bounded_move,
                                  contact_force_hessian, friction_limit, friction_part, membrane_force_hessian)
 
 WARP_SIZE = 32
@@ -205,8 +205,4 @@ def solve_colour(
         limit = friction_limit(i, best, body.lam, verts.friction, verts.area, body.friction_pressure,
                                body.friction_used)
         new = body_stick_slip(new, sub.x_prev[i], hel, body.normal[i, best], body.disp[i, best], limit)
-    move = new - sub.x_det[i]
-    L = wp.length(move)
-    if L > sub.bound[i]:
-        new = sub.x_det[i] + move * (sub.bound[i] / L)
-    x_out[i] = new
+    x_out[i] = bounded_move(new, sub.x_det[i], sub.bound_end[i], sub.bound[i])

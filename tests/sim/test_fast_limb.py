@@ -1,16 +1,16 @@
-"""A limb that moves faster than the cloth's move bound lets it (issue 66, `small`'s scene 54).
+"""A limb that moves faster than the cloth's move bound once let it (issue 66, `small`'s scene 54).
 
 A vertex with other cloth within the bound floor (6 mm) may move 0.45 x 6 mm per cloth-cloth
-detection; with detection every 5 sweeps (4 detections a substep, 10 substeps a frame) that caps
-such cloth at 3.24 m/s. A swinging ankle reaches 3.9 m/s in the walk, passes into the bunched hem of
-a trouser leg, and the projection then puts the hem's vertices out on opposite sides of the shin:
-the fat body's pants:9 walking tore by 305 % on an H200 (frame 111) and by 464 % on the CPU alone
-(frame 80). This scene shows the same in a few frames: a 4 cm limb moving at 4 m/s into two cotton
-layers 3 mm apart. 20 substeps hold it (33.7 % strain), the defaults do not (706 %).
+detection; with detection every 5 sweeps (4 detections a substep, 10 substeps a frame), measured
+from where the vertex was at detection, that held such cloth to 3.24 m/s. A swinging ankle reaches
+3.9 m/s in the walk, passed into the bunched hem of a trouser leg, and the projection then put the
+hem's vertices out on opposite sides of the shin: the fat body's pants:9 walking tore by 305 % on
+an H200 (frame 111) and by 464 % on the CPU alone (frame 80). This scene shows the same in a few
+frames: a 4 cm limb moving at 4 m/s into two cotton layers 3 mm apart (706 % with the bound about
+the detection's position, 33.7 % with 20 substeps).
 
-The fix proposed (bounds measured from where the body carries a vertex, not from where it was
-detected) changes the solver's kernels; until it lands this test is an expected failure, strict, so
-that the fix turns it into a pass.
+The bound is now measured from the segment along which the body carries the vertex over the
+substep (``kernels.carry_bound``): the layers ride the limb (38 % here, no vertex inside it).
 """
 
 import numpy as np
@@ -58,8 +58,6 @@ def _limb_through_two_layers(speed: float, frames: int = 12) -> tuple[float, int
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, raises=AssertionError, reason="issue 66: cloth near other cloth is held to 3.24 m/s by its move bound; "
-                   "a faster limb tears it (706 % here, 305 % in small's scene 54)")
 def test_a_limb_faster_than_the_move_bound_does_not_tear_two_layers():
     strain, inside = _limb_through_two_layers(4.0)
     assert inside == 0 and strain < 0.45, f"strain {strain:.2f}, {inside} vertices inside the limb"
