@@ -205,9 +205,9 @@ def sewn_garment(entry: GarmentEntry, placed, body_model, betas, run_config):
     r = sew(placed, body_v, np.asarray(body_model.faces), body_face_part=face_parts(body_model.weights, body_model.faces),
             config=run_config.sewing, solver=run_config.solver, thresholds=run_config.thresholds, device="cpu")
     if r.failure is not None:
-        raise InputError(f"garment {entry} could not be sewn on its body: {r.failure}; name another seed or design "
+        raise InputError(f"garment {entry.type_name}:{entry.seed} could not be sewn on its body: {r.failure}; name another seed or design "
                          f"(`python -m benchmarks sewing-survey` shows which sew)")
-    log.info("garment %s sewn in %d frames, static after %d, %.1f s", entry, r.sew_frames, r.settle_frames, r.seconds)
+    log.info("garment %s:%d sewn in %d frames, static after %d, %.1f s", entry.type_name, entry.seed, r.sew_frames, r.settle_frames, r.seconds)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp.npz")
