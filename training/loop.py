@@ -253,6 +253,8 @@ def fit(module, data, config: BaseConfig, out: Path, *, device: str = "auto", re
             if trainer.interrupted:
                 raise KeyboardInterrupt from None
             raise
+        if trainer.interrupted:  # Lightning's graceful shutdown may also return from fit
+            raise KeyboardInterrupt
     score = best.best_model_score
     rates = read_metrics(out, THROUGHPUT_KEY, attempts=[attempt]) if trainer.is_global_zero else {}
     result = {"best": None if score is None else float(score), "best_checkpoint": best.best_model_path,

@@ -237,12 +237,21 @@ def test_a_batch_too_large_for_the_device_stops_the_run_with_what_to_do_and_keep
     import datagen.sim.device as dv
     from datagen.generate.plan import Plan, open_writer
 
-    calls = []
+    import sys
+
+    import datagen.sim.scene as sc
+
+    batches, simulate = [], sc.simulate
+
+    def counted(*args, **kwargs):  # the scene batches count (the templates' settle at rest simulates too)
+        if sys._getframe(1).f_globals["__name__"] == "datagen.generate.samples":
+            batches.append(1)
+        return simulate(*args, **kwargs)
 
     def free(device):
-        calls.append(device)
-        return None if len(calls) == 1 else 2**20
+        return None if len(batches) <= 1 else 2**20
 
+    monkeypatch.setattr(sc, "simulate", counted)
     monkeypatch.setattr(dv, "device_free_bytes", free)
     config = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "batch_size": 1}})
     out = tmp_path / "small-device.zarr"

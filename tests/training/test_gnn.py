@@ -247,9 +247,14 @@ def test_epoch_frames_draws_a_fresh_subset_every_epoch():
         return frames.train_dataloader()
 
     loader = _loader(GNNConfig(batch_size=4, workers=0, epoch_frames=12))
-    epochs = [sorted(int(v) for b in loader for v in b.x[:, 0]) for _ in range(3)]
+
+    def epoch(k: int) -> list[int]:
+        loader.sampler.set_epoch(k)  # as Lightning does before every epoch
+        return sorted(int(v) for b in loader for v in b.x[:, 0])
+
+    epochs = [epoch(k) for k in range(3)]
     assert all(len(e) == len(set(e)) == 12 for e in epochs) and len(loader) == 3
-    assert epochs[0] != epochs[1] != epochs[2]
+    assert epochs[0] != epochs[1] != epochs[2] and epoch(1) == epochs[1]  # a function of (seed, epoch)
     again = _loader(GNNConfig(batch_size=4, workers=0, epoch_frames=12))
     assert sorted(int(v) for b in again for v in b.x[:, 0]) == epochs[0]  # seeded
     whole = _loader(GNNConfig(batch_size=4, workers=0))
