@@ -111,7 +111,9 @@ def test_ctrl_c_of_drape_train_says_how_to_resume(train_store, tmp_path):
     cfg.write_text(json.dumps({**GNN, "epochs": 50}))
     proc = subprocess.Popen([sys.executable, "-m", "datagen.cli", "train", "gnn", "--data", str(train_store), "--out",
                              str(run), "--config", str(cfg), "--device", "cpu"],
-                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True,
+                            # as from a terminal: a test run in the background inherits SIGINT ignored
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     t0 = time.time()
     while time.time() - t0 < 300 and proc.poll() is None and not (run / "checkpoints" / "last.ckpt").is_file():
         time.sleep(0.2)
