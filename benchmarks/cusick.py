@@ -113,10 +113,16 @@ def drape(mat, edge: float, seconds: float, config: SolverConfig):
     v, f = disc_mesh(SPECIMEN_RADIUS, edge)
     clearance = mat.thickness + config.body_margin
     v[:, 1] += clearance + 0.001
-    bv, bf = support_mesh()
     frames = np.tile(np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0]]), (len(f), 1, 1))  # weft X, warp -Z
+    return drape_on_support(v, f, seconds, config, material_name=mat, material_frames=frames)
+
+
+def drape_on_support(start: np.ndarray, f: np.ndarray, seconds: float, config: SolverConfig, **cloth):
+    """Cloth ``start`` [V, 3] / ``f`` on the support (``cloth``: ``add_cloth``'s keywords) draped for
+    ``seconds``: (positions [V, 3], faces, largest vertex speed at the end [m/s])."""
+    bv, bf = support_mesh()
     b = ClothModelBuilder()
-    b.add_cloth(v, f, material_name=mat, material_frames=frames)
+    b.add_cloth(start, f, **cloth)
     b.add_body(bv, bf)
     model = b.finalize("cpu")
     s0, s1 = ClothState.from_model(model), ClothState.from_model(model)

@@ -20,12 +20,9 @@ import time
 
 import numpy as np
 
-from benchmarks.cusick import FPS, SPECIMEN_RADIUS, SUPPORT_RADIUS, count_nodes, disc_mesh, shadow, support_mesh
+from benchmarks.cusick import SPECIMEN_RADIUS, SUPPORT_RADIUS, count_nodes, disc_mesh, drape_on_support, shadow
 from datagen.materials import MATERIALS, drape_range
-from datagen.sim.model import ClothModelBuilder
 from datagen.sim.settings import SolverConfig
-from datagen.sim.solver import SolverVBD
-from datagen.sim.state import BodyControl, ClothState
 
 
 def domed(v: np.ndarray, dome: float) -> np.ndarray:
@@ -54,19 +51,8 @@ def drape_flat(mat, edge: float, seconds: float, dome: float, config: SolverConf
     uv = np.stack([v[:, 0], -v[:, 2]], 1)  # panel coordinates: u along X (weft), v along -Z (warp)
     start = domed(v, dome)
     start[:, 1] += mat.thickness + config.body_margin + 0.001
-    bv, bf = support_mesh()
-    b = ClothModelBuilder()
-    b.add_cloth(start, f, material_name=mat, rest_corners=uv[f], grain=np.tile([0.0, 1.0], (len(f), 1)))
-    b.add_body(bv, bf)
-    model = b.finalize("cpu")
-    s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
-    control = BodyControl.from_numpy(model, model.host.body_rest)
-    solver = SolverVBD(model, config)
-    for _ in range(int(seconds * FPS)):
-        solver.step(s0, s1, control, 1.0 / FPS)
-        s0, s1 = s1, s0
-    x, vel = s0.numpy()
-    return x.astype(np.float64), f, float(np.linalg.norm(vel, axis=1).max())
+    return drape_on_support(start, f, seconds, config, material_name=mat, rest_corners=uv[f],
+                            grain=np.tile([0.0, 1.0], (len(f), 1)))
 
 
 def drape_coefficient(x: np.ndarray, f: np.ndarray) -> tuple[float, int]:
