@@ -225,32 +225,6 @@ def check_dataset_config(c: DatasetConfig) -> None:
                               "or bodies to it, or set fit_attribute = false (paper 001's models do not use α)")
 
 
-PAPER_MOTION_HELD_OUT = {"tempo": (0.95, 1.10), "amplitude": (0.88, 1.02)}
-"""paper-motion's held-out region of the two style parameters every motion label has
-(``datagen.motion.library``: tempo, the rhythm; amplitude, the main movement's scale): its val and test
-motions lie inside it on both, its training motions outside :data:`PAPER_MOTION_MARGIN` on both. The
-test motions are then unseen in substance, not other seeds of the same draws: a copied training
-segment cannot match their rhythm and scale, and a generator must interpolate between the training
-motions around them (issue 62: with seeds 8 and 9 of the same draws, copying a random training segment
-scored FID 1.2 and 100 % accuracy, beyond any generator by construction). The labels' own parameters
-(stride, depth, bpm, ...) come from their whole ranges in every split."""
-
-PAPER_MOTION_MARGIN = {"tempo": (0.92, 1.13), "amplitude": (0.85, 1.05)}
-"""The band around :data:`PAPER_MOTION_HELD_OUT` that paper-motion's training motions stay out of."""
-
-# the first seeds of each label whose style parameters lie outside the margin (training) and inside the
-# held-out region (val, test), from datagen.motion.library.style_params; tests/training/test_splits.py
-# checks them against the two regions
-_PAPER_MOTION_TRAIN_SEEDS = {
-    "walk": (2, 5, 8, 10), "run": (0, 1, 7, 22), "jump": (1, 6, 10, 11), "squat": (1, 2, 8, 11),
-    "lunge": (0, 4, 20, 24), "kick": (2, 7, 11, 15), "wave": (0, 6, 7, 11), "raise_arms": (0, 1, 3, 4),
-    "arm_circles": (1, 3, 7, 8), "torso_twist": (2, 5, 12, 16), "bend_forward": (4, 10, 11, 12),
-    "side_bend": (4, 16, 17, 23), "sit_stand": (0, 2, 9, 21), "turn_in_place": (1, 2, 6, 9), "box": (0, 1, 9, 13),
-    "dance_sway": (0, 1, 6, 7), "dance_disco": (0, 5, 7, 8)}
-_PAPER_MOTION_HELD_OUT_SEEDS = {  # (val, test)
-    "walk": (4, 9), "run": (3, 4), "jump": (0, 9), "squat": (17, 21), "kick": (0, 1), "wave": (1, 8),
-    "arm_circles": (2, 23), "box": (11, 18), "dance_sway": (5, 18), "dance_disco": (6, 19)}
-
 SHELL_PRESETS: dict[str, dict] = {
     # a few minutes on 2 CPU cores: coarse garments, one 60-frame segment each, three bodies
     "tiny": {
@@ -325,20 +299,20 @@ SHELL_PRESETS: dict[str, dict] = {
                  + [f"{m}:9" for m in ("walk", "run", "squat", "wave", "box", "dance_sway", "dance_disco")]},
     },
     # paper 001 §4.1: one template per garment type (skirt, T-shirt, pants) on the mean body, motions
-    # of every label cut into T = 60 segments; split by motion only, the val and test motions from a
-    # held-out region of the style parameters (PAPER_MOTION_HELD_OUT, below)
+    # of every label cut into T = 60 segments; split by motion only
     "paper-motion": {
         "seed": 0, "frames": 240, "segment_length": 60, "split_disjoint": ["motions"], "fit_attribute": False,
         "simulation": {"batch_size": 64},
         "train": {"garments": ["skirt:0", "tshirt:0", "pants:0"], "bodies": ["regular"],
-                  "motions": [f"{m}:{seeds[k]}" for k in range(4) for m, seeds in _PAPER_MOTION_TRAIN_SEEDS.items()]},
+                  "motions": [f"{m}:{s}" for s in range(4) for m in (
+                      "walk", "run", "jump", "squat", "lunge", "kick", "wave", "raise_arms", "arm_circles",
+                      "torso_twist", "bend_forward", "side_bend", "sit_stand", "turn_in_place", "box", "dance_sway",
+                      "dance_disco")]},
         "val": {"garments": ["skirt:0", "tshirt:0", "pants:0"], "bodies": ["regular"],
-                "motions": [f"{m}:{_PAPER_MOTION_HELD_OUT_SEEDS[m][0]}"
-                            for m in ("walk", "squat", "wave", "box", "dance_sway", "dance_disco")]},
+                "motions": [f"{m}:8" for m in ("walk", "squat", "wave", "box", "dance_sway", "dance_disco")]},
         "test": {"garments": ["skirt:0", "tshirt:0", "pants:0"], "bodies": ["regular"],
-                 "motions": [f"{m}:{_PAPER_MOTION_HELD_OUT_SEEDS[m][1]}" for m in (
-                     "walk", "run", "jump", "squat", "kick", "wave", "arm_circles", "box", "dance_sway",
-                     "dance_disco")]},
+                 "motions": [f"{m}:9" for m in ("walk", "run", "jump", "squat", "kick", "wave", "arm_circles", "box",
+                                                "dance_sway", "dance_disco")]},
     },
 }
 

@@ -9,10 +9,11 @@
   trained on; with sewn patterns, one of its designs comes from a program (design family) that no
   training design comes from.
 - Figure 10's validation: garments and bodies never trained on, as the test's.
-- Paper 001 (``paper-motion``): the val and test motions lie in the held-out region of the style
-  parameters every label has, which no training motion comes near (``PAPER_MOTION_HELD_OUT``,
-  ``PAPER_MOTION_MARGIN``), so copying a training segment no longer matches a test motion by
-  construction; and every val and test label is a label the generator trains on.
+- Paper 001 (``paper-motion``): the val and test motions are never trained on, and their labels
+  are labels the generator trains on (``drape evaluate`` leaves out a label it never saw). Its test
+  motions are still other seeds of the training generators: a held-out region of tempo and
+  amplitude was tried and moved the test motions no further from the training set
+  (``benchmarks/motion_split_copy.py``; docs/training.md).
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from datagen.generate.config import PAPER_MOTION_HELD_OUT, PAPER_MOTION_MARGIN, PRESET_VARIANTS
+from datagen.generate.config import PRESET_VARIANTS
 
 pytestmark = pytest.mark.slow
 
@@ -95,25 +96,10 @@ def test_table_2_has_unseen_garments_motions_and_bodies_and_figure_10_validates_
 
 
 @pytest.mark.parametrize("family", FAMILIES)
-def test_paper_001s_test_motions_lie_in_a_held_out_region_of_the_style_parameters(family):
-    from datagen.generate.config import parse_motion
-    from datagen.motion.library import style_params
-
+def test_paper_001s_val_and_test_motions_are_unseen_motions_of_trained_labels(family):
     sets = split_sets(plan_of("paper-motion", family))
-    params = {split: {m: style_params(*parse_motion(m)) for m in sets[split]["motions"]} for split in sets}
-    for m, p in params["train"].items():  # every training motion outside the margin, on both parameters
-        for k, (a, b) in PAPER_MOTION_MARGIN.items():
-            assert not a <= p[k] <= b, f"training motion {m} has {k} {p[k]:.3f} inside the margin [{a}, {b}]"
+    train = sets["train"]["motions"]
     for split in ("val", "test"):
-        assert params[split], split
-        for m, p in params[split].items():
-            for k, (a, b) in PAPER_MOTION_HELD_OUT.items():
-                assert a <= p[k] <= b, f"{split} motion {m} has {k} {p[k]:.3f} outside the held-out [{a}, {b}]"
-        # labels the generator trains on (a label it never saw is not scored: drape evaluate leaves it out)
-        assert {m.split(":")[0] for m in params[split]} <= {m.split(":")[0] for m in params["train"]}
-    for k, (a, b) in PAPER_MOTION_HELD_OUT.items():  # the margin contains the region
-        lo, hi = PAPER_MOTION_MARGIN[k]
-        assert lo < a < b < hi
-    # every label keeps its four training motions (paper 001's 17 labels, as before the split changed)
-    labels = [m.split(":")[0] for m in params["train"]]
-    assert len(set(labels)) == 17 and all(labels.count(x) == 4 for x in set(labels))
+        assert sets[split]["motions"] and sets[split]["motions"].isdisjoint(train)
+        assert {m.split(":")[0] for m in sets[split]["motions"]} <= {m.split(":")[0] for m in train}
+        assert sets[split]["garments"] == sets["train"]["garments"]  # the regressor's templates in every split
