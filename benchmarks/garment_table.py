@@ -41,7 +41,7 @@ def main(argv=None) -> int:
     head = (f"{'run':28s} {'frame':12s} {'BOS':8s} {'val RMSE cm':>11s} | {'test RMSE cm':>12s} {'Hausdorff dm':>12s} "
             f"{'STED x1e-2':>10s} {'normal cos':>10s} {'inside %':>8s}")
     for garment, names in sorted(by_garment.items()):
-        val = {n: runs[n]["val"]["model"]["rmse"] for n in names if "val" in runs[n]}
+        val = {n: _rmse(runs[n]["val"]["model"]) for n in names if "val" in runs[n]}
         chosen = min(val, key=val.get) if val else None
         print(f"\n{garment}: chosen on the validation split: {chosen}")
         print(head)
@@ -54,17 +54,23 @@ def main(argv=None) -> int:
                    f"{meta['bos']:8s} {v} | ")
             if e:
                 m = e["model"]
-                row += (f"{100 * m['rmse']:12.2f} {10 * m['hausdorff']:12.3f} {100 * m['sted']:10.1f} "
+                row += (f"{100 * _rmse(m):12.2f} {10 * m['hausdorff']:12.3f} {100 * m['sted']:10.1f} "
                         f"{m['normal_cosine']:10.4f} {_inside(m)}   ({e['segments']} segments)")
                 base, e_base = e["skinned_baseline"], e
             else:
                 row += "no test evaluation"
             print(row)
         if base:
-            print(f"{'skinned template':28s} {'':12s} {'':8s} {'':11s} | {100 * base['rmse']:12.2f} "
+            print(f"{'skinned template':28s} {'':12s} {'':8s} {'':11s} | {100 * _rmse(base):12.2f} "
                   f"{10 * base['hausdorff']:12.3f} {100 * base['sted']:10.1f} {base['normal_cosine']:10.4f} "
                   f"{_inside(base)}")
             if "simulated_inside_share" in e_base:
                 print(f"{'simulated garment':28s} {'':12s} {'':8s} {'':11s} | {'':12s} {'':12s} {'':10s} {'':10s} "
                       f"{100 * e_base['simulated_inside_share']:8.2f}")
     return 0
+
+
+def _rmse(row: dict) -> float:
+    """The per-coordinate vertex RMSE of an evaluation row (``rmse`` in evaluations before issue 62)."""
+    return row["vertex_rmse_per_coordinate"] if "vertex_rmse_per_coordinate" in row else row["rmse"]
+

@@ -34,6 +34,10 @@ class BaseConfig:
         precision: Lightning's precision; ``auto``: bf16 mixed on a GPU, 32-bit on the CPU.
         max_minutes: stop training after this much wall time (None: no limit); the last finished
             epoch's checkpoints stay.
+        threads: torch's CPU threads in the training process (``torch.set_num_threads``; None:
+            torch's default, one per core). On a small shared machine set it with ``workers`` so
+            that threads plus worker processes do not exceed the cores (the ``configs/*_cpu.yaml``
+            files: 2 threads, no workers). An execution setting: a resumed run may change it.
     """
 
     LEGACY: ClassVar[dict[str, Any]] = {}
@@ -50,6 +54,7 @@ class BaseConfig:
     workers: int = field(default=2, metadata={"min": 0, "max": 64})
     precision: str = field(default="auto", metadata={"choices": PRECISIONS})
     max_minutes: float | None = field(default=None, metadata={"min": 0.1})
+    threads: int | None = field(default=None, metadata={"min": 1, "max": 1024})
 
     def as_dict(self) -> dict:
         return dataclasses.asdict(self)

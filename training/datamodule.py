@@ -43,6 +43,21 @@ class EpochSampler(torch.utils.data.Sampler):
         return self.num_samples
 
 
+class CropSampler(EpochSampler):
+    """:class:`EpochSampler`'s order, each item with where to crop it: yields ``(index, u)`` with
+    ``u`` uniform in [0, 1), drawn from the same (seed, epoch) generator after the order (so the
+    order is :class:`EpochSampler`'s and a resumed run draws the crops it would have drawn). A
+    dataset that takes such a pair maps ``u`` to a window start (paper 001's motion generator:
+    :class:`~training.paper001.data.MotionSegmentDataset`, a random 60-frame window of the motion
+    each epoch, as ACTOR crops its training sequences)."""
+
+    def __iter__(self):
+        g = torch.Generator().manual_seed(self.seed * 100003 + self.epoch)
+        order = torch.randperm(self.n, generator=g)[:self.num_samples]
+        where = torch.rand(len(order), generator=g, dtype=torch.float64)
+        return iter(zip(order.tolist(), where.tolist(), strict=True))
+
+
 class StoreDataModule(pl.LightningDataModule):
     """Datasets of one store for one config (see the module docstring)."""
 

@@ -44,8 +44,16 @@ LAST_CHECKPOINT_SECONDS = 60.0
 and Adam moments after each such epoch cost more than the steps (eight runs on one GPU wrote about
 1 GB/s). A killed run loses at most this much training."""
 
-RESUME_MAY_CHANGE = ("epochs", "max_minutes")
-"""Config keys a resumed run may change: it may be given more epochs or more time."""
+RESUME_MAY_CHANGE = ("epochs", "max_minutes", "threads")
+"""Config keys a resumed run may change: it may be given more epochs or more time, or run on
+another number of CPU threads."""
+
+
+def apply_threads(config: BaseConfig) -> None:
+    """``torch.set_num_threads(config.threads)`` where the config sets it (None: torch's default)."""
+    threads = getattr(config, "threads", None)
+    if threads:
+        torch.set_num_threads(int(threads))
 
 
 def resolve_device(device: str) -> str:
@@ -271,10 +279,14 @@ def fit(module, data, config: BaseConfig, out: Path, *, device: str = "auto", re
 
 
 def plateau_optimizer(module, params, config, monitor: str, *, patience_steps: int | None = None) -> dict:
-    """``configure_optimizers``'s answer for every drape model: Adam at ``config.lr`` on ``params``,
-    and the rate times ``config.lr_factor`` when ``monitor`` has not fallen for ``config.lr_patience``
-    epochs (or more where epochs are short: :func:`plateau_patience` with ``patience_steps``)."""
-    opt = torch.optim.Adam(params, lr=config.lr)
+    """``configure_optimizers``'s answer for every drape model: Adam at ``config.lr`` on ``params``
+    (AdamW, decoupled weight decay, where the config has a ``weight_decay`` above 0: paper 001's
+    models), and the rate times ``config.lr_factor`` when ``monitor`` has not fallen for
+    ``config.lr_patience`` epochs (or more where epochs are short: :func:`plateau_patience` with
+    ``patience_steps``)."""
+    decay = float(getattr(config, "weight_decay", 0.0) or 0.0)
+    opt = (torch.optim.AdamW(params, lr=config.lr, weight_decay=decay) if decay > 0
+           else torch.optim.Adam(params, lr=config.lr))
     patience = plateau_patience(module, config.lr_patience, patience_steps)
     sched = torch.optim.lr_scheduler.ReduceLROnPlateau(opt, factor=config.lr_factor, patience=patience)
     return {"optimizer": opt, "lr_scheduler": {"scheduler": sched, "monitor": monitor}}

@@ -33,3 +33,14 @@ def hausdorff(a: torch.Tensor, b: torch.Tensor) -> torch.Tensor:
         a_to_b[n] = torch.maximum(a_to_b[n], d.min(dim=1).values.max())
         b_to_a[n] = torch.minimum(b_to_a[n], d.min(dim=0).values)
     return torch.maximum(a_to_b, b_to_a.max(dim=1).values)
+
+
+def rmse(squared_sum: float, points: int, what: str, point: str) -> dict[str, float]:
+    """Both RMSEs of ``points`` 3-vectors (joints' axis-angles, vertices) whose squared errors sum to
+    ``squared_sum``, named: ``{what}_rmse_per_coordinate`` (the root of the mean squared coordinate
+    error) and ``{what}_rmse_per_{point}`` (the root of the mean squared Euclidean distance, √3
+    times the first). Papers rarely say which they report; drape prints both."""
+    if points <= 0:
+        return {f"{what}_rmse_per_coordinate": float("nan"), f"{what}_rmse_per_{point}": float("nan")}
+    return {f"{what}_rmse_per_coordinate": (squared_sum / (3 * points)) ** 0.5,
+            f"{what}_rmse_per_{point}": (squared_sum / points) ** 0.5}

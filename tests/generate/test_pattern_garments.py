@@ -115,7 +115,9 @@ def test_pattern_presets_read_and_the_default_is_one_switch():
             assert not any(parse_garment_entry(g).is_pattern for g in b.garments)
         assert (p.simulation, p.frames, p.split_disjoint) == (s.simulation, s.frames, s.split_disjoint)
     programs = {parse_garment_entry(g).name for g in resolve_config(preset="paper-gnn-pattern").train.garments}
-    assert len(programs) == 9  # every pattern program is in paper-gnn's training split
+    # every pattern program but skirt_gored is in paper-gnn's training split: Table 2's unseen designs
+    # include one of a family never trained on (issue 62; tests/training/test_splits.py)
+    assert len(programs) == 8 and "skirt_gored" not in programs
     with pytest.raises(ConfigError, match="add -shell or -pattern"):
         resolve_config(preset="tiny-lace")
 

@@ -107,12 +107,15 @@ def test_training_loss_falls_and_evaluation_gives_the_tables(garment_run, capsys
     assert result["bos_pretrain_loss"][-1] < result["bos_pretrain_loss"][0]
     e = evaluate_garment(run, split="test", device="cpu")
     assert e["garment"] == "skirt" and e["frames"] == e["segments"] * 3
-    for row in (e["model"], e["skinned_baseline"]):
+    for row in (e["model"], e["skinned_baseline"], e["copy_baseline"]):
         assert all(np.isfinite(v) for v in row.values()) and -1 <= row["normal_cosine"] <= 1
         assert 0 <= row["inside_share"] <= 1
+        # both RMSEs, named: per vertex (Euclidean) is √3 times per coordinate
+        assert row["vertex_rmse_per_vertex"] == pytest.approx(3 ** 0.5 * row["vertex_rmse_per_coordinate"])
     assert 0 <= e["simulated_inside_share"] <= 1
     assert main(["evaluate", str(run), "--split", "test", "--device", "cpu"]) == 0
-    assert "skinned template" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "skinned template" in printed and "nearest training segment (copy)" in printed and "per vertex" in printed
     assert json.loads((run / "run.json").read_text())["kind"] == "garment"
 
 
@@ -225,7 +228,7 @@ def test_refinement_writes_a_run_and_reports_interpenetration(motion_store, garm
     assert 0 <= summary["inside_share_before"] <= 1 and 0 <= summary["inside_share_after"] <= 1
     assert json.loads((out / "run.json").read_text())["refined_from"] == str(run.resolve())
     e = evaluate_garment(out, split="test", device="cpu")  # the refined run is a regressor run like any other
-    assert np.isfinite(e["model"]["rmse"])
+    assert np.isfinite(e["model"]["vertex_rmse_per_vertex"])
     assert main(["train", "refine", "--garment-model", str(run), "--motion-model", str(motion_run), "--out", str(out),
                  "--samples", "4", "--steps", "5"]) == 2
     assert "exists and is not empty" in capsys.readouterr().err
@@ -312,7 +315,7 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
     losses = list(read_metrics(run, "train/loss_epoch").values())
     assert len(losses) == 3 and all(np.isfinite(losses))
     e = evaluate_garment(run, split="test", device="cpu")
-    assert e["relative_to"] == "skinned" and np.isfinite(e["model"]["rmse"])
+    assert e["relative_to"] == "skinned" and np.isfinite(e["model"]["vertex_rmse_per_vertex"])
     # training derives the skinned template from the batch's poses (on the training device); it is the
     # store's derived ``skin``, which evaluation reads
     from training.paper001.data import SegmentDataset
@@ -327,7 +330,7 @@ def test_frames_relative_to_the_skinned_template(motion_store, tmp_path):
         state["state_dict"][k] = torch.zeros_like(state["state_dict"][k])
     torch.save(state, ckpt)
     e = evaluate_garment(run, split="test", device="cpu")
-    for k in ("rmse", "hausdorff", "sted", "inside_share"):
+    for k in ("vertex_rmse_per_coordinate", "vertex_rmse_per_vertex", "hausdorff", "sted", "inside_share"):
         assert e["model"][k] == pytest.approx(e["skinned_baseline"][k], rel=1e-5, abs=1e-7), k
     store = open_store(motion_store)
     m = store.motions()

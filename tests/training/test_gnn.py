@@ -77,7 +77,7 @@ def test_training_loss_falls_and_checkpoints_are_written(trained):
 def test_evaluate_and_predict_end_to_end(trained, train_store, tmp_path):
     from datagen.cli import main
     from datagen.store import open_store
-    from training.gnn.run import evaluate_gnn
+    from training.gnn.run import evaluate_gnn, format_evaluation
 
     run, _ = trained
     e = evaluate_gnn(run, split="test", device="cpu")
@@ -89,6 +89,11 @@ def test_evaluate_and_predict_end_to_end(trained, train_store, tmp_path):
     assert e["table"]["all"]["truth_detail"] > 0 and e["table"]["all"]["truth_coarse_to_detail"] > 0
     for key in ("coarse", "detail", "zero_coarse", "zero_detail", "skinned_detail"):
         assert np.isfinite(e["table"]["all"][key]) and e["table"]["all"][key] > 0
+    for key in ("detail", "zero_detail", "skinned_detail"):  # both RMSEs, named, beside the mean error
+        r = e["table"]["all"]
+        assert r[f"{key}_rmse_per_vertex"] >= r[key] - 1e-9  # the root mean square is at least the mean
+        assert r[f"{key}_rmse_per_coordinate"] == pytest.approx(r[f"{key}_rmse_per_vertex"] / 3 ** 0.5)
+    assert "per vertex (Euclidean) / per coordinate" in format_evaluation(e)
     assert 0 <= e["inside_body_share"] <= 1 and e["model_ms_per_frame"] > 0
     store = open_store(train_store)
     sample = int(store.split("test", include_failed=False)[0])

@@ -85,11 +85,17 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
 
     run, _ = motion_run
     e = evaluate_motion(run, split="test", device="cpu", repetitions=3, recognizer_epochs=5)
-    for row in (e["model"], e["mean_pose_baseline"], e["own_mean_pose"]):
+    rows = (e["model"], e["mean_pose_baseline"], e["own_mean_pose"], e["nearest_training_segment"])
+    for row in rows:
         assert all(np.isfinite(v) and v > 0 for v in row.values())
+        # both RMSEs, named: the Euclidean one per joint / vertex is √3 times the per-coordinate one
+        assert row["pose_rmse_per_joint"] == pytest.approx(3 ** 0.5 * row["pose_rmse_per_coordinate"])
+        assert row["vertex_rmse_per_vertex"] == pytest.approx(3 ** 0.5 * row["vertex_rmse_per_coordinate"])
     # the segment's own mean pose is the best static pose: closer than the label's mean on every frame set
-    assert e["own_mean_pose"]["pose_rmse"] < e["mean_pose_baseline"]["pose_rmse"]
+    assert e["own_mean_pose"]["pose_rmse_per_coordinate"] < e["mean_pose_baseline"]["pose_rmse_per_coordinate"]
     assert e["frames"] == e["segments"] * 3
+    # the vertex figures are on the whole body, whatever vertex_stride (40 here) the run trained with
+    assert e["body_vertices"] == len(open_store_of(run).body_model()["v_template"]) and e["untrained_labels"] == {}
     assert e["real_speed"] > 0  # how much the reconstructions move against the true segments
     g = e["generation"]
     assert g["repetitions"] == 3 and 0 <= g["recognizer_test_accuracy"] <= 1
@@ -100,10 +106,60 @@ def test_evaluate_gives_table_3_beside_the_mean_pose_baseline(motion_run, capsys
     assert gp["latent"] == "posterior" and g["latent"] == "prior" and gp["real"] == g["real"]
     assert np.isfinite(gp["generated"]["fid"]["mean"])
     assert g["real"]["speed"]["mean"] > 0 and gp["generated"]["speed"]["mean"] >= 0
+    base = e["generation_baselines"]  # Table 4 beside a still and a copying generator
+    assert base["still"]["speed"]["mean"] == pytest.approx(0, abs=1e-7) and base["copy"]["speed"]["mean"] > 0
+    assert np.isfinite(base["copy"]["fid"]["mean"]) and base["still"]["multimodality"]["mean"] == pytest.approx(0, abs=1e-5)
     assert main(["evaluate", str(run), "--split", "test", "--device", "cpu", "--repetitions", "2"]) == 0
     out = capsys.readouterr().out
     assert "label's mean pose" in out and "segment's own mean pose" in out and "generated, prior" in out and "generated, posterior" in out
     assert "multimodality" in out and "speed of the reconstructions" in out
+    assert "per joint" in out and "per vertex" in out and "nearest training segment (copy)" in out
+    assert "copy: a training segment" in out and "still: label's mean pose" in out
+
+
+def open_store_of(run):
+    from datagen.store import open_store
+
+    return open_store(json.loads((run / "run.json").read_text())["store"]["path"])
+
+
+def test_evaluate_on_one_segment_gives_table_3_and_says_why_not_table_4(motion_run, monkeypatch, capsys):
+    """A split with one segment (issue 62: scipy's traceback from FID's covariance) gets Table 3 and
+    one line saying why Table 4 is not measured."""
+    import training.motion.run as run_module
+    from datagen.cli import main
+
+    real = run_module.trained_segments
+
+    def one(store, split, labels):
+        ds, left_out = real(store, split, labels)
+        ds.rows, ds.labels, ds.last_start = ds.rows[:1], ds.labels[:1], ds.last_start[:1]
+        return ds, left_out
+
+    monkeypatch.setattr(run_module, "trained_segments", one)
+    run, _ = motion_run
+    e = run_module.evaluate_motion(run, split="test", device="cpu", repetitions=2, recognizer_epochs=2)
+    assert e["segments"] == 1 and "generation" not in e and "at least 2" in e["generation_skipped"]
+    assert np.isfinite(e["model"]["pose_rmse_per_joint"])
+    assert main(["evaluate", str(run), "--split", "test", "--device", "cpu", "--repetitions", "2"]) == 0
+    assert "generation (Table 4) not measured" in capsys.readouterr().out
+
+
+def test_evaluate_refuses_a_split_of_labels_the_generator_never_trained_on(motion_run, capsys):
+    """The micro store's val split is all `wave`, which its train split has none of: not scored silently."""
+    from datagen.cli import main
+    from training.motion.run import trained_segments
+
+    run, _ = motion_run
+    store = open_store_of(run)
+    names = list(store.attrs["label_names"])
+    with pytest.raises(InputError, match="never trained on them"):
+        trained_segments(store, "val", len(names))
+    assert main(["evaluate", str(run), "--split", "val", "--device", "cpu", "--repetitions", "2"]) != 0
+    err = capsys.readouterr().err
+    assert "wave" in err and "never trained" in err and "Traceback" not in err
+    kept, left_out = trained_segments(store, "test", len(names))
+    assert left_out == {} and len(kept) > 0
 
 
 def test_the_posterior_latent_is_each_labels_gaussian_over_the_training_posteriors(motion_run, tmp_path):
@@ -317,3 +373,77 @@ def test_the_graphed_training_step_gives_the_eager_gradients(monkeypatch):
         assert torch.allclose(loss_g, loss_e.detach(), rtol=1e-4), k
         for (name, pg), pe in zip(graphed.named_parameters(), eager.parameters()):
             assert torch.allclose(pg.grad, pe.grad, rtol=1e-3, atol=1e-6), (k, name)
+
+
+def test_training_crops_each_motion_at_random_from_the_seed_and_epoch(train_store):
+    """Training windows are random crops of the (motion, body) pairs (ACTOR's cropping), drawn from
+    (seed, epoch) alone: the order is EpochSampler's, the same epoch gives the same crops (a resumed
+    run draws what it would have), other epochs other crops, and every crop lies inside its motion."""
+    from datagen.store import open_store
+    from training.datamodule import CropSampler, EpochSampler
+    from training.paper001.data import MotionSegmentDataset
+
+    store = open_store(train_store)
+    ds = MotionSegmentDataset(store, "train")
+    L = store.segment_length
+    recorded = store.motions()["pose"].shape[1]
+    sampler = CropSampler(len(ds), seed=3)
+    sampler.set_epoch(5)
+    first = list(sampler)
+    plain = EpochSampler(len(ds), 3)
+    plain.set_epoch(5)
+    assert [k for k, _ in first] == list(plain)  # the same order as the fixed windows' sampler
+    assert list(sampler) == first  # a function of (seed, epoch)
+    starts = set()
+    for epoch in range(6):
+        sampler.set_epoch(epoch)
+        for k, u in sampler:
+            item = ds[(k, u)]
+            m, b, _ = (int(v) for v in ds.rows[k])
+            t0 = int(item["first_frame"])
+            assert int(item["motion"]) == m and int(item["body"]) == b and 0 <= t0 <= recorded - L
+            fixed = store.motion_segment(m, b, t0)
+            assert np.array_equal(item["pose"].numpy(), fixed["pose"])
+            starts.add(t0)
+    assert len(starts) > len({int(r[2]) for r in ds.rows})  # starts between the fixed windows' too
+    assert int(ds[0]["first_frame"]) == int(ds.rows[0][2])  # an index alone is the fixed window
+
+
+def test_the_kl_term_is_actors_sum_over_the_batch(train_store):
+    """L_KL is summed over the latent dimensions and the batch (ACTOR's compute_kl_loss), the
+    reconstruction terms are means: for a full batch the loss is L_P + L_V^B + λ_KL Σ_batch KL."""
+    from datagen.store import open_store
+    from training.motion.module import MotionModule, motion_losses
+    from training.paper001.data import MotionSegmentDataset
+
+    store = open_store(train_store)
+    config = MotionConfig(**{**SMALL, "batch_size": 2, "kl_weight": 0.5})
+    ds = MotionSegmentDataset(store, "train")
+    module = MotionModule(config, len(store.attrs["label_names"]), store.body_model(), store.betas())
+    batch = next(iter(torch.utils.data.DataLoader(ds, batch_size=2)))
+    torch.manual_seed(0)
+    r = motion_losses(module.model, module.body, module.betas, batch, config)
+    torch.manual_seed(0)
+    from training.paper001.frames import pose_features
+
+    x, _ = pose_features(batch)
+    _, mu, logvar = module.model(x, batch["label"][:, 0].long())
+    actor = -0.5 * torch.sum(1 + logvar - mu.pow(2) - logvar.exp())  # ACTOR: over the batch and the dimensions
+    assert float(r["kl"]) == pytest.approx(float(actor) / 2, rel=1e-5)
+    assert float(r["loss"]) == pytest.approx(float(r["pose"] + r["vertex"] + 0.5 * actor), rel=1e-5)
+
+
+def test_paper_001s_models_train_with_weight_decay_and_the_gnn_without():
+    """Paper 001's "L2" is AdamW's decay at ACTOR's 0.01 for both of its models; the GNN keeps Adam;
+    a run stored before the field existed trained without decay."""
+    from training.garment.config import GarmentConfig
+    from training.gnn.config import GNNConfig
+    from training.loop import plateau_optimizer
+
+    params = [torch.nn.Parameter(torch.zeros(3))]
+    for config in (MotionConfig(), GarmentConfig()):
+        opt = plateau_optimizer(None, params, config, "val/loss")["optimizer"]
+        assert isinstance(opt, torch.optim.AdamW) and opt.defaults["weight_decay"] == 0.01
+    opt = plateau_optimizer(None, params, GNNConfig(), "val/loss")["optimizer"]
+    assert type(opt) is torch.optim.Adam and opt.defaults["weight_decay"] == 0
+    assert MotionConfig.from_dict({}).weight_decay == 0.0 and GarmentConfig.from_dict({}).weight_decay == 0.0

@@ -47,7 +47,7 @@ class GarmentConfig(Paper001Config):
         target_scale: positions are in metres x this in the loss (100: cm).
     """
 
-    LEGACY = {"relative_to": "translation", "lr_patience_steps": None}
+    LEGACY = {"relative_to": "translation", "lr_patience_steps": None, "weight_decay": 0.0}
 
     garment: str = "skirt"
     epochs: int = default("epochs", 2000)

@@ -5,7 +5,8 @@
   the coarse and the detailed prediction per body and over the split, and again per category of
   :func:`seen_in_training` (Table 1: garments and poses seen in training on unseen bodies; Table 2:
   unseen garments, bodies and poses), beside two trivial baselines (Δ = 0, the body surface at the
-  anchor; and the skinned garment), and the share of predicted vertices inside the posed body.
+  anchor; and the skinned garment), the RMSE of the prediction and of both baselines per vertex and
+  per coordinate (named), and the share of predicted vertices inside the posed body.
 - :func:`predict_sample`: every frame of one sample predicted, with the per-vertex error.
 """
 
@@ -22,8 +23,8 @@ from datagen.errors import InputError
 from datagen.store import open_store
 from training.gnn.config import GNNConfig
 from training.gnn.data import FrameDataset
-from training.loop import (fit, prepare_run, resolve_device, run_checkpoint, seed_everything, store_identity,
-                           write_summary)
+from training.loop import (apply_threads, fit, prepare_run, resolve_device, run_checkpoint, seed_everything,
+                           store_identity, write_summary)
 
 KIND = "gnn"
 
@@ -35,6 +36,7 @@ def train_gnn(data: str | Path, out: str | Path, config: GNNConfig, *, device: s
     from training.gnn.module import GNNModule
 
     resolve_device(device)
+    apply_threads(config)
     store = open_store(data)
     frames = GNNDataModule(store, config)
     frames.setup()
@@ -115,10 +117,13 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
                 "truth_coarse_to_detail": (batch.coarse - batch.detail).norm(dim=-1)}
         if on_truth is not None:
             errs["truth_detail"] = (on_truth - batch.detail).norm(dim=-1)
+        errs = {k: 1000 * v for k, v in errs.items()}  # mm
+        for k in RMSE_OF:  # squared distances (mm²), whose frame means give the RMSEs (summary)
+            errs[f"sq_{k}"] = errs[k] ** 2
         # every frame's mean of every measure at once, one copy to the host per batch (not one per
         # frame and measure, each a wait for the device)
-        per_frame = 1000 * scatter(torch.stack(list(errs.values()), 1), batch.batch, dim=0,
-                                   dim_size=batch.num_graphs, reduce="mean").cpu().double()
+        per_frame = scatter(torch.stack(list(errs.values()), 1), batch.batch, dim=0,
+                            dim_size=batch.num_graphs, reduce="mean").cpu().double()
         groups: dict[tuple[str | None, str], list[int]] = {}  # the batch's frames of each table row
         for k in range(batch.num_graphs):
             body, category = names[int(batch.body[k])], seen[int(batch.sample[k])]
@@ -141,7 +146,11 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
             progress(n_frames, len(ds))
 
     def summary(r: FrameMeans) -> dict[str, float]:
-        return r.compute()
+        out = r.compute()
+        for k in RMSE_OF:  # the root of the mean squared distance: per vertex (Euclidean) and per coordinate
+            sq = out.pop(f"sq_{k}")
+            out[f"{k}_rmse_per_vertex"], out[f"{k}_rmse_per_coordinate"] = sq ** 0.5, (sq / 3) ** 0.5
+        return out
 
     table = {key: summary(r) for key, r in rows.items()}
     out = {"run": str(run), "checkpoint": str(ckpt), "split": split, "store": str(store.path), "frames": len(ds),
@@ -152,6 +161,12 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
            "parameters": sum(p.numel() for p in module.parameters()),
            "model_mb": sum(p.numel() * p.element_size() for p in module.parameters()) / 1e6}
     return out
+
+
+RMSE_OF = ("detail", "zero_detail", "skinned_detail")
+"""The measures whose RMSE the tables add to their means (the prediction and the two baselines against
+the simulated garment): per vertex (the root of the frame's mean squared Euclidean distance, mean
+over frames) and per coordinate (that over √3)."""
 
 
 class FrameMeans:
@@ -221,6 +236,13 @@ def format_evaluation(e: dict[str, Any]) -> str:
     block("per body, every frame", e["table"])
     for category, table in e.get("by_seen", {}).items():
         block(category, table)
+    rmse_rows = [(key, r) for key, r in e["table"].items() if "detail_rmse_per_vertex" in r]
+    if rmse_rows:
+        lines.extend(["", "RMSE (mm), per vertex (Euclidean) / per coordinate (√3 smaller), against the simulated garment:",
+                      f"  {'':<32}{'detail':>16}{'Δ=0 detail':>16}{'skinned':>16}"])
+        for key, r in rmse_rows:
+            lines.append(f"  {key:<32}" + "".join(f"{r[k + '_rmse_per_vertex']:>8.2f} /{r[k + '_rmse_per_coordinate']:>6.2f}"
+                                                  for k in RMSE_OF))
     if e.get("inside_body_share") is not None:
         lines.append(f"\npredicted detail vertices inside the posed body: {100 * e['inside_body_share']:.2f} %")
     return "\n".join(lines)

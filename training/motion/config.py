@@ -19,7 +19,8 @@ class MotionConfig(Paper001Config):
         lr_patience_steps: 2,700: paper 001's 30 epochs of ~1,800 segments in batches of 20.
         d_model, heads, layers, feedforward, dropout: paper: 256, 4, N = 8, 1024, 0.1.
         label_hidden: the label encoder's hidden width (paper: 128).
-        kl_weight: λ_KL (paper: 1e-5).
+        kl_weight: λ_KL (paper: 1e-5), on the KL summed over the batch as ACTOR sums it
+            (:mod:`training.motion.module`).
         vertex_loss: include L_V^B (the body-vertex loss); false is Table 8's ablation.
         vertex_stride: the vertex loss and vertex metrics use every ``vertex_stride``-th body vertex
             (1: all 13,348, the paper's; larger only to make CPU tests fast).
@@ -30,7 +31,7 @@ class MotionConfig(Paper001Config):
             "16-mixed" precision, every operation is launched from Python.
     """
 
-    LEGACY = {"lr_patience_steps": None}
+    LEGACY = {"lr_patience_steps": None, "weight_decay": 0.0}
 
     epochs: int = default("epochs", 5000)
     batch_size: int = default("batch_size", 20)

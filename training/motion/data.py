@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from datagen.errors import InputError
-from training.datamodule import StoreDataModule
+from training.datamodule import CropSampler, StoreDataModule
 from training.motion.config import MotionConfig
 from training.paper001.data import MotionSegmentDataset
 
@@ -31,7 +31,11 @@ def label_names(store) -> list[str]:
 
 class MotionDataModule(StoreDataModule):
     """The labelled segments of the train and val splits (:func:`labelled_segments`) for ``drape
-    train motion``, and what the run records: the label names, the frame rate and the segment length."""
+    train motion``, and what the run records: the label names, the frame rate and the segment length.
+
+    Training takes as many windows per epoch as the store has fixed windows, each a random crop of
+    its (motion, body) drawn from the run's seed and the epoch (:class:`~training.datamodule.CropSampler`;
+    ACTOR's cropping); validation reads the fixed windows, so its loss is comparable between epochs."""
 
     config: MotionConfig
 
@@ -41,7 +45,7 @@ class MotionDataModule(StoreDataModule):
         self.val_set = labelled_segments(self.store, "val")
 
     def train_dataloader(self):
-        return self.loader(self.train_set, shuffle=True)
+        return self.loader(self.train_set, sampler=CropSampler(len(self.train_set), self.config.seed))
 
     def val_dataloader(self):
         return self.loader(self.val_set)

@@ -5,7 +5,12 @@
 - L_V^B: mean squared error of the posed body's vertices [m], from the predicted and the true
   rotations through drape's differentiable skinning (``datagen.geometry.skinning``) on the segment's
   own body (its β from the store); ``vertex_loss = false`` drops it (Table 8's ablation).
-- L_KL: the KL divergence of N(μ, σ²) from N(0, I), averaged over the batch.
+- L_KL: the KL divergence of N(μ, σ²) from N(0, I), summed over the latent dimensions and over the
+  batch, as ACTOR computes it (``compute_kl_loss``: ``-0.5 * torch.sum(...)`` over the whole batch;
+  paper 001's λ_KL = 1e-5 is ACTOR's, set for that sum) while L_P and L_V^B are means: the
+  segments' mean KL times the config's (global) batch size, which is ACTOR's sum for every full
+  batch, under DDP too, and weighs an epoch's short last batch, and validation, as a full one.
+  Until issue 62 drape averaged it over the batch: 1/20 of ACTOR's weight at the paper's batch.
 Adam, and the rate times ``lr_factor`` when the validation loss has not fallen for ``lr_patience``
 epochs (§4.2).
 
@@ -37,7 +42,8 @@ from training.paper001.frames import features_to_frames, pose_features
 def motion_losses(model: MotionCVAE, body: BodyLayer, betas: torch.Tensor, batch: dict, config: MotionConfig, *,
                   sample: bool = True) -> dict[str, torch.Tensor]:
     """L_B and its terms (see the module docstring) of a batch: ``loss``, ``pose``, ``vertex``, ``kl``
-    and the mean vertex error ``vertex_mm`` (mm); ``sample`` False: through the posterior mean."""
+    (the mean KL of a segment; the loss weighs ``config.batch_size`` times it) and the mean vertex
+    error ``vertex_mm`` (mm); ``sample`` False: through the posterior mean."""
     x, rot = pose_features(batch)
     label = batch["label"][:, 0].long()
     if sample:
@@ -48,13 +54,13 @@ def motion_losses(model: MotionCVAE, body: BodyLayer, betas: torch.Tensor, batch
     out = out.float()
     mse = torch.nn.functional.mse_loss
     pose = mse(out, x)
-    kl = -0.5 * torch.mean(torch.sum(1 + logvar - mu.pow(2) - logvar.exp(), dim=1))
+    kl = -0.5 * torch.mean(torch.sum(1 + logvar - mu.pow(2) - logvar.exp(), dim=1))  # per segment
     prot, ptrans = features_to_frames(out)
     b = batch["body"].long()
     v_true = posed_vertices(body, betas, rot, x[..., -3:], b)
     v_pred = posed_vertices(body, betas, prot, ptrans, b)
     vertex = mse(v_pred, v_true)
-    total = pose + config.kl_weight * kl
+    total = pose + config.kl_weight * config.batch_size * kl  # ACTOR's sum over a batch
     if config.vertex_loss:
         total = total + vertex
     return {"loss": total, "pose": pose, "vertex": vertex, "kl": kl,

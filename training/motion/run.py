@@ -9,8 +9,11 @@
   (m), the Hausdorff distance between predicted and true vertex sets (m, mean over frames), STED
   on the whole body mesh (:mod:`training.paper001.sted`, mean over segments), beside
   a trivial baseline (every frame the label's mean pose over the training segments, the true
-  translation) and a static oracle (every frame the test segment's own mean pose, the true
-  translation: what a model that has learned each sequence's pose but none of its motion scores).
+  translation), a static oracle (every frame the test segment's own mean pose, the true
+  translation: what a model that has learned each sequence's pose but none of its motion scores)
+  and a copy (the nearest training segment of the label: how far the split's motions lie from the
+  training set). Both RMSEs are named: per coordinate and per joint / vertex (Euclidean). Segments
+  of labels the run never trained on are counted, not scored; Table 4 needs two segments.
 - :func:`sample_motions`: new motions of a label, as the motion library's ``.npz``.
 - :func:`label_latents`: where samples come from. ``prior`` is the paper's Z ~ N(0, I);
   ``posterior`` a Gaussian per label fitted to the training segments' posteriors (mean of μ; variance
@@ -30,8 +33,8 @@ import torch
 
 from datagen.errors import InputError
 from datagen.store import open_store
-from training.loop import (fit, prepare_run, resolve_device, run_checkpoint, seed_everything, store_identity,
-                           write_summary)
+from training.loop import (apply_threads, fit, prepare_run, resolve_device, run_checkpoint, seed_everything,
+                           store_identity, write_summary)
 from training.motion.config import MotionConfig
 from training.motion.data import MotionDataModule, labelled_segments
 from training.paper001.data import MotionSegmentDataset
@@ -46,6 +49,7 @@ def train_motion(data: str | Path, out: str | Path, config: MotionConfig, *, dev
     from training.motion.module import MotionModule
 
     resolve_device(device)
+    apply_threads(config)
     store = open_store(data)
     segments = MotionDataModule(store, config)
     segments.setup()
@@ -76,33 +80,67 @@ def load_motion(run: str | Path, *, checkpoint: str = "best", data: str | Path |
     return module, meta, path, store
 
 
-def _split_tensors(store, split: str, device) -> tuple[torch.Tensor, torch.Tensor]:
-    """Frame features [N, T, 147] and labels [N] of a split's labelled segments."""
+def _split_tensors(store, split: str, device, labels: int | None = None) -> tuple[torch.Tensor, torch.Tensor]:
+    """Frame features [N, T, 147] and labels [N] of a split's labelled segments (with ``labels``,
+    the run's label count: only those of labels the run has training segments of,
+    :func:`trained_segments`)."""
     from training.paper001.frames import pose_features
 
+    ds = labelled_segments(store, split) if labels is None else trained_segments(store, split, labels)[0]
     xs, ys = [], []
-    for batch in torch.utils.data.DataLoader(labelled_segments(store, split), batch_size=64, shuffle=False):
+    for batch in torch.utils.data.DataLoader(ds, batch_size=64, shuffle=False):
         xs.append(pose_features(batch)[0])
         ys.append(batch["label"][:, 0].long())
     return torch.cat(xs).to(device), torch.cat(ys).to(device)
 
 
+def trained_segments(store, split: str, labels: int) -> tuple[MotionSegmentDataset, dict[int, int]]:
+    """The split's labelled segments of the labels the train split has segments of, and the segments
+    left out per label that it has none of ({label: segments}): a generator cannot have learned a
+    label it never saw, so evaluation reports those segments instead of scoring them. A split with
+    none left is refused in one line."""
+    ds = labelled_segments(store, split)
+    counts = train_label_counts(store, labels)
+    keep = counts[ds.labels] > 0
+    left_out = {int(k): int((ds.labels == k).sum()) for k in np.unique(ds.labels[~keep])}
+    if not keep.any():
+        names = list(store.attrs.get("label_names") or [])
+        raise InputError(f"every labelled segment of the {split} split of {store.path} has a label the train split "
+                         f"has no segment of ({', '.join(names[k] if k < len(names) else str(k) for k in left_out)}): "
+                         "the generator never trained on them, so there is nothing to evaluate")
+    ds.rows, ds.labels, ds.last_start = ds.rows[keep], ds.labels[keep], ds.last_start[keep]
+    return ds, left_out
+
+
+MIN_GENERATION_SEGMENTS = 2
+"""Table 4 needs at least this many test segments: FID compares covariances of the features, and
+one segment has none (scipy's square root then failed on NaN: issue 62)."""
+
+
 def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: str = "test", device: str = "auto",
                     generation: bool = True, repetitions: int = 20, recognizer_epochs: int = 100) -> dict[str, Any]:
-    """Table 3 (reconstruction, beside the mean-pose baseline) and, with ``generation``, Table 4
-    (:mod:`training.motion.recognition`) on ``split``; JSON-able."""
+    """Table 3 (reconstruction, beside the still and copied baselines) and, with ``generation``,
+    Table 4 (:mod:`training.motion.recognition`, beside :mod:`training.paper001.baselines`' still and
+    copy generators) on ``split``'s segments of labels the run trained on (the others are counted
+    in ``untrained_labels``, not scored); JSON-able. Every figure is on the whole body mesh,
+    whatever ``vertex_stride`` the run trained with."""
     if generation and repetitions < 2:
         raise InputError(f"--repetitions must be 2 or more (the spread needs two), got {repetitions}")
     loaded = load_motion(run, data=data)  # once: the checkpoint and the store serve both tables
     dev = torch.device("cuda" if resolve_device(device) == "gpu" else "cpu")
     e = _reconstruction(loaded, split, dev)
-    if generation:
+    if generation and e["segments"] < MIN_GENERATION_SEGMENTS:
+        e["generation_skipped"] = (f"the {split} split has {e['segments']} segment(s) of trained labels; Table 4 "
+                                   f"needs at least {MIN_GENERATION_SEGMENTS} (FID compares feature covariances)")
+    elif generation:
+        from datagen.geometry.rotations import axis_angle_to_matrix
+        from training.paper001.baselines import copy_generator, still_generator
         from training.motion.recognition import generation_metrics, train_recognizer
 
         module, meta, _, store = loaded
         labels = len(meta["labels"])
         x_train, y_train = _split_tensors(store, "train", dev)
-        x_test, y_test = _split_tensors(store, split, dev)
+        x_test, y_test = _split_tensors(store, split, dev, labels)
         torch.manual_seed(0)
         recognizer = train_recognizer(x_train, y_train, labels, epochs=recognizer_epochs, seed=0)
         frames = x_test.shape[1]
@@ -116,6 +154,10 @@ def evaluate_motion(run: str | Path, *, data: str | Path | None = None, split: s
             key = "generation" if latent == "prior" else f"generation_{latent}"
             e[key] = generation_metrics(recognizer, generate, x_test, y_test, x_train, repetitions=repetitions)
             e[key] |= {"recognizer_epochs": recognizer_epochs, "latent": latent}
+        mean = axis_angle_to_matrix(_mean_poses(labelled_segments(store, "train"), labels)).to(dev)
+        e["generation_baselines"] = {
+            name: generation_metrics(recognizer, gen, x_test, y_test, x_train, repetitions=repetitions)["generated"]
+            for name, gen in (("still", still_generator(mean, frames)), ("copy", copy_generator(x_train, y_train)))}
     return e
 
 
@@ -198,30 +240,40 @@ def label_latents(loaded, latent: str, *, device=None) -> tuple[torch.Tensor, to
 
 @torch.no_grad()
 def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
-    """Reconstruction on ``split`` (see the module docstring) for the model and the baseline; JSON-able."""
+    """Reconstruction on ``split`` (see the module docstring) for the model and the baselines; JSON-able.
+
+    Every vertex figure is on the whole body mesh (13,348 vertices; the run's ``vertex_stride``, a
+    training setting, does not change them). RMSEs are given twice, named: per coordinate (the root
+    of the mean squared coordinate error) and per joint / per vertex (the root of the mean squared
+    Euclidean distance, √3 times the first); paper 001's Table 3 does not say which it reports."""
     from datagen.geometry.rotations import axis_angle_to_matrix, matrix_to_axis_angle
-    from training.metrics import hausdorff
+    from training.metrics import hausdorff, rmse
+    from training.paper001.baselines import nearest_training_segments
+    from training.motion.recognition import motion_speed
     from training.paper001.body import BodyLayer
     from training.paper001.frames import features_to_frames, pose_features
-    from training.motion.recognition import motion_speed
     from training.paper001.sted import mesh_edges, sted
 
     module, meta, ckpt, store = loaded
     module.to(dev)
+    labels = len(meta["labels"])
     body_arrays = store.body_model()
-    full = BodyLayer(body_arrays, 1).to(dev)  # STED needs the whole mesh
+    full = BodyLayer(body_arrays, 1).to(dev)  # every figure on the whole mesh
     edges = torch.as_tensor(mesh_edges(body_arrays["faces"]), device=dev)
 
     def posed(rot, trans, body):
         B, T = rot.shape[:2]
         v = full(rot.reshape(B * T, 24, 3, 3), trans.reshape(B * T, 3), module.betas[body].repeat_interleave(T, 0))
         return v.reshape(B, T, -1, 3)
-    test = labelled_segments(store, split)
-    mean_pose = _mean_poses(labelled_segments(store, "train"), len(meta["labels"])).to(dev)
-    rows = ("model", "mean_pose_baseline", "own_mean_pose")
+    test, untrained = trained_segments(store, split, labels)
+    train = labelled_segments(store, "train")
+    mean_pose = _mean_poses(train, labels).to(dev)
+    x_train, y_train = _split_tensors(store, "train", dev)
+    train_pose = torch.stack([train[k]["pose"] for k in range(len(train))]).float().to(dev)  # [M, T, 24, 3]
+    rows = ("model", "mean_pose_baseline", "own_mean_pose", "nearest_training_segment")
     sums = {r: {"pose_sq": 0.0, "vertex_sq": 0.0, "hausdorff": 0.0, "sted": 0.0} for r in rows}
     speed = {"model": [], "real": []}  # Table 4's speed of the reconstructions and of the true segments
-    counts = {"pose": 0, "vertex": 0, "frames": 0, "segments": 0}
+    counts = {"joints": 0, "vertices": 0, "frames": 0, "segments": 0}
     for batch in torch.utils.data.DataLoader(test, batch_size=8, shuffle=False):
         batch = {k: v.to(dev) for k, v in batch.items()}
         x, rot = pose_features(batch)
@@ -236,33 +288,35 @@ def _reconstruction(loaded, split: str, dev: torch.device) -> dict[str, Any]:
         B, T = rot.shape[:2]
         label_mean = mean_pose[label][:, None].expand_as(pose_true)  # the label's mean training pose
         own_mean = pose_true.mean(1, keepdim=True).expand_as(pose_true)  # the segment's own mean pose, held
+        near = nearest_training_segments(x, label, x_train, y_train)
+        copied = train_pose[near]  # the nearest training segment of the label, its own translation
         candidates = {"model": (matrix_to_axis_angle(prot), prot, ptrans),
                       "mean_pose_baseline": (label_mean, axis_angle_to_matrix(label_mean), x[..., -3:]),
-                      "own_mean_pose": (own_mean, axis_angle_to_matrix(own_mean), x[..., -3:])}
-        keep = module.body.keep  # the vertex metrics' vertices (every vertex_stride-th) of the whole mesh
-        t_full = posed(rot, x[..., -3:], body)
-        v_true = t_full[:, :, keep]
+                      "own_mean_pose": (own_mean, axis_angle_to_matrix(own_mean), x[..., -3:]),
+                      "nearest_training_segment": (copied, axis_angle_to_matrix(copied), x_train[near][..., -3:])}
+        v_true = posed(rot, x[..., -3:], body)
         flat = (B * T, -1, 3)
         for name, (aa, r, tr) in candidates.items():
-            full_mesh = posed(r, tr, body)  # posed once: STED on all of it, the other metrics on ``keep``
-            v = full_mesh[:, :, keep]
+            v = posed(r, tr, body)
             acc = sums[name]
             acc["pose_sq"] += float(((aa - pose_true) ** 2).sum())
             acc["vertex_sq"] += float(((v - v_true) ** 2).sum())
             acc["hausdorff"] += float(hausdorff(v.reshape(flat), v_true.reshape(flat)).sum())
-            acc["sted"] += float(sted(full_mesh, t_full, edges)["sted"].sum())
-        counts["pose"] += pose_true.numel()
-        counts["vertex"] += v_true.numel()
+            acc["sted"] += float(sted(v, v_true, edges)["sted"].sum())
+        counts["joints"] += pose_true.numel() // 3
+        counts["vertices"] += v_true.numel() // 3
         counts["frames"] += B * T
         counts["segments"] += B
-    out = {r: {"pose_rmse": (sums[r]["pose_sq"] / counts["pose"]) ** 0.5,
-               "vertex_rmse": (sums[r]["vertex_sq"] / counts["vertex"]) ** 0.5,
+    out = {r: {**rmse(sums[r]["pose_sq"], counts["joints"], "pose", "joint"),
+               **rmse(sums[r]["vertex_sq"], counts["vertices"], "vertex", "vertex"),
                "hausdorff": sums[r]["hausdorff"] / counts["frames"], "sted": sums[r]["sted"] / counts["segments"]}
            for r in rows}
     out["model"]["speed"] = sum(speed["model"]) / counts["segments"]
     out["real_speed"] = sum(speed["real"]) / counts["segments"]  # the static rows' speed is 0
+    names = meta["labels"]
     return {"kind": KIND, "split": split, "checkpoint": str(ckpt), "segments": len(test),
-            "frames": counts["frames"], "vertex_stride": meta["config"]["vertex_stride"], **out}
+            "frames": counts["frames"], "body_vertices": int(full.keep.numel()),
+            "untrained_labels": {names[k]: n for k, n in untrained.items()}, **out}
 
 
 def _mean_poses(ds: MotionSegmentDataset, labels: int) -> torch.Tensor:
@@ -277,32 +331,49 @@ def _mean_poses(ds: MotionSegmentDataset, labels: int) -> torch.Tensor:
 
 
 def format_motion_evaluation(e: dict) -> str:
-    m, b = e["model"], e["mean_pose_baseline"]
-    lines = [f"{e['split']} split: {e['segments']} segments, {e['frames']} frames (vertex metrics on every "
-             f"{e['vertex_stride']}. body vertex)", "", "reconstruction (paper 001 Table 3):",
-             f"{'':24s} {'pose RMSE (x1e-2)':>18s} {'vertex RMSE (x1e-2 m)':>22s} {'Hausdorff (x1e-1 m)':>20s} "
-             f"{'STED (x1e-2)':>13s}"]
-    named = [("model", m), ("label's mean pose", b)]
-    if e.get("own_mean_pose"):
-        named.append(("segment's own mean pose", e["own_mean_pose"]))
-    for name, r in named:
-        lines.append(f"{name:24s} {100 * r['pose_rmse']:18.3f} {100 * r['vertex_rmse']:22.3f} "
-                     f"{10 * r['hausdorff']:20.3f} {100 * r['sted']:13.3f}")
+    lines = [f"{e['split']} split: {e['segments']} segments, {e['frames']} frames (vertex figures on all "
+             f"{e.get('body_vertices', '?')} body vertices)"]
+    if e.get("untrained_labels"):
+        lines.append("left out, not scored: " + ", ".join(f"{n} segment(s) of {name}" for name, n in
+                                                          e["untrained_labels"].items())
+                     + " (labels the generator never trained on: the train split has no segment of them)")
+    lines += ["", "reconstruction (paper 001 Table 3); RMSE per coordinate, and per joint / per vertex (Euclidean, "
+                  "√3 x the first):",
+              f"{'':34s} {'pose RMSE x1e-2':>16s} {'per joint':>10s} {'vertex RMSE x1e-2 m':>20s} {'per vertex':>11s} "
+              f"{'Hausdorff x1e-1 m':>18s} {'STED x1e-2':>11s}"]
+    named = [("model", "model"), ("label's mean pose (still)", "mean_pose_baseline"),
+             ("segment's own mean pose (still)", "own_mean_pose"),
+             ("nearest training segment (copy)", "nearest_training_segment")]
+    for name, key in named:
+        r = e.get(key)
+        if r is None:
+            continue
+        lines.append(f"{name:34s} {100 * r['pose_rmse_per_coordinate']:16.3f} {100 * r['pose_rmse_per_joint']:10.3f} "
+                     f"{100 * r['vertex_rmse_per_coordinate']:20.3f} {100 * r['vertex_rmse_per_vertex']:11.3f} "
+                     f"{10 * r['hausdorff']:18.3f} {100 * r['sted']:11.3f}")
+    m = e["model"]
     if "speed" in m and e.get("real_speed"):
         lines.append(f"speed of the reconstructions (Table 4's measure): {1000 * m['speed']:.3f}e-3 against "
                      f"{1000 * e['real_speed']:.3f}e-3 for the true segments ({m['speed'] / e['real_speed']:.2f}x); the "
-                     "static rows hold their pose")
+                     "still rows hold their pose")
+    if e.get("generation_skipped"):
+        lines += ["", f"generation (Table 4) not measured: {e['generation_skipped']}"]
     g = e.get("generation")
     if g:
         lines += ["", f"generation (Table 4; {g['repetitions']} generated sets, mean ± 95 % interval; recogniser: "
                       f"GRU trained {g['recognizer_epochs']} epochs on the train split, {100 * g['recognizer_test_accuracy']:.1f} % "
                       "on the real test motions; Z from N(0, I), the paper's prior, and from each label's Gaussian "
-                      "fitted to the training posteriors):",
-                  f"{'':24s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s} "
+                      "fitted to the training posteriors; beside them a still and a copying generator):",
+                  f"{'':34s} {'FID':>16s} {'accuracy %':>16s} {'diversity':>16s} {'multimodality':>16s} "
                   f"{'speed (x1e-3)':>16s}"]
         rows = [("real test motions", g["real"]), ("generated, prior", g["generated"])]
         if e.get("generation_posterior"):
             rows.append(("generated, posterior", e["generation_posterior"]["generated"]))
+        base = e.get("generation_baselines") or {}
+        if "still" in base:
+            rows.append(("still: label's mean pose", base["still"]))
+        if "copy" in base:
+            rows.append(("copy: a training segment", base["copy"]))
         for name, r in rows:
             cells = []
             for k in ("fid", "accuracy", "diversity", "multimodality", "speed"):
@@ -310,7 +381,7 @@ def format_motion_evaluation(e: dict) -> str:
                     continue
                 scale = {"accuracy": 100, "speed": 1000}.get(k, 1)
                 cells.append(f"{scale * r[k]['mean']:9.3f}±{scale * r[k]['interval']:<6.3f}")
-            lines.append(f"{name:24s} " + " ".join(f"{c:>16s}" for c in cells))
+            lines.append(f"{name:34s} " + " ".join(f"{c:>16s}" for c in cells))
     return "\n".join(lines)
 
 

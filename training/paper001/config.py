@@ -16,6 +16,10 @@ class Paper001Config(BaseConfig):
         lr_patience_steps: the plateau schedule also waits for at least this many optimiser steps
             (``training.loop.plateau_patience``), so that a small store's short epochs do not cut
             the rate on the validation loss's noise; None: epochs only.
+        weight_decay: AdamW's decoupled weight decay (0: Adam without decay). Paper 001 §4.2 "employs
+            L2 normalization" against over-fitting in both branches and gives no value; ACTOR, whose
+            settings the motion branch follows, trains with ``torch.optim.AdamW`` at PyTorch's
+            default decay, 0.01, which both models take (runs from before the field: 0).
         d_model, heads, layers, feedforward, dropout: the Transformers.
     """
 
@@ -24,6 +28,7 @@ class Paper001Config(BaseConfig):
     early_stop_patience: int = default("early_stop_patience", 200)
     workers: int = default("workers", 0)
     lr_patience_steps: int | None = field(default=None, metadata={"min": 1, "max": 10000000})
+    weight_decay: float = field(default=0.01, metadata={"min": 0.0, "max": 1.0})
     d_model: int = field(default=256, metadata={"min": 8, "max": 4096})
     heads: int = field(default=4, metadata={"min": 1, "max": 64})
     layers: int = field(default=8, metadata={"min": 1, "max": 64})

@@ -50,8 +50,15 @@ class SegmentDataset(torch.utils.data.Dataset):
 class MotionSegmentDataset(torch.utils.data.Dataset):
     """Segments of the motions of one split (paper 001's motion generator), from ``motions/pose``
     and ``motions/trans`` (:meth:`DatasetStore.motion_segments`): ``pose`` [T, 24, 3], ``trans``
-    [T, 3], ``label`` [T], ``motion`` and ``body`` (whose shape the vertex loss poses); with
-    ``labelled`` only the motions of a label (>= 0; unlabelled mocap is -1)."""
+    [T, 3], ``label`` [T], ``motion``, ``body`` (whose shape the vertex loss poses) and
+    ``first_frame``; with ``labelled`` only the motions of a label (>= 0; unlabelled mocap is -1).
+
+    Item ``k`` is the store's fixed window (every ``segment_length`` frames from the first: what
+    validation and evaluation read). Item ``(k, u)`` with ``u`` in [0, 1) is a window of the same
+    (motion, body) starting anywhere in the motion (``floor(u * (last start + 1))``): the random crop
+    that training draws each epoch (:class:`~training.datamodule.CropSampler`), as ACTOR crops its
+    sequences, where the fixed windows would show the model the same four cuts of each motion for
+    ever."""
 
     def __init__(self, store: str | Path | DatasetStore, split: str, *, labelled: bool = True):
         self.store = store if isinstance(store, DatasetStore) else open_store(store)
@@ -59,13 +66,23 @@ class MotionSegmentDataset(torch.utils.data.Dataset):
         labels = self.store.motion_labels()[rows[:, 0]] if len(rows) else np.zeros(0, np.int64)
         self.rows = rows[labels >= 0] if labelled else rows
         self.labels = (labels[labels >= 0] if labelled else labels).astype(np.int64)
+        # the last frame a window may start at: the motion table's recorded frames less one window
+        recorded = int(self.store.motions()["pose"].shape[1])
+        self.last_start = np.full(len(self.rows), recorded - self.store.segment_length, np.int64)
 
     def __len__(self) -> int:
         return len(self.rows)
 
-    def __getitem__(self, k: int) -> dict[str, torch.Tensor]:
-        s = self.store.motion_segment(*(int(v) for v in self.rows[k]))
+    def __getitem__(self, k) -> dict[str, torch.Tensor]:
+        if isinstance(k, tuple):  # a random crop (CropSampler): the row's motion and body, anywhere in it
+            k, u = int(k[0]), float(k[1])
+            motion, body, _ = (int(v) for v in self.rows[k])
+            first = min(int(u * (int(self.last_start[k]) + 1)), int(self.last_start[k]))
+        else:
+            motion, body, first = (int(v) for v in self.rows[k])
+        s = self.store.motion_segment(motion, body, first)
         out = {n: torch.from_numpy(np.ascontiguousarray(s[n])) for n in ("pose", "trans", "label")}
         out["motion"] = torch.tensor(s["motion"])
         out["body"] = torch.tensor(s["body"])
+        out["first_frame"] = torch.tensor(s["first_frame"])
         return out
