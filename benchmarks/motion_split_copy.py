@@ -13,7 +13,7 @@ middle of the two style parameters every label has (tempo in [0.95, 1.10], ampli
 seeds of each label, 4 per label as before). Printed first for each split: how far each test window
 lies from the nearest training window of its label.
 
-    python benchmarks/motion_split_copy.py [--repetitions 20] [--recognizer-epochs 100]
+    python -m benchmarks motion-split-copy [--repetitions 20] [--recognizer-epochs 100]
 """
 
 from __future__ import annotations

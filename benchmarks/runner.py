@@ -49,6 +49,8 @@ CASES: tuple[Case, ...] = (
          summary="the motion generator's loader alone, optimiser step alone and both, in segments/s"),
     Case(name="motion-trivial", module="benchmarks.motion_trivial", needs="a store",
          summary="Table 4 for two trivial generators (each label's mean pose held; a copied training segment)"),
+    Case(name="motion-split-copy", module="benchmarks.motion_split_copy",
+         summary="Table 4's copy and still generators on paper-motion's split and on a held-out style region"),
     Case(name="choose-motion-run", module="benchmarks.choose_motion_run", needs="drape evaluate JSON files",
          summary="per (run, latent) FID, accuracy, diversity, multimodality on the validation split, and the choice"),
     Case(name="sampled-motion-sheet", module="benchmarks.sampled_motion_sheet", needs="drape sample motion output, a store",
