@@ -146,16 +146,47 @@ def store_type_names() -> list[str]:
     return [*garment_type_names(), *(PATTERN_PREFIX + p for p in PROGRAMS), FILE_TYPE]
 
 
-def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None, run_config=None):
+def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None, run_config=None,
+                  device: str = "cpu"):
     """The :class:`~datagen.garment.mesh.GarmentMesh` of ``entry`` on the body of shape ``betas``
-    (rest pose): a shell from the garment cache, or a pattern garment fitted to the body's
-    measurements (a program) or read from its file, meshed at ``edge_length`` (default
-    :data:`PATTERN_EDGE_LENGTH`), placed around the body and, given the run's ``run_config`` (a
-    :class:`~datagen.sim.scene.RunConfig`), sewn there and welded (:func:`sewn_garment`)."""
+    (:func:`build_instance`), for a caller that needs a garment to simulate.
+
+    Raises:
+        InputError: a pattern garment that cannot be sewn on its body, with the reason.
+    """
+    garment, failure = build_instance(entry, body_model, betas, edge_length, run_config, device)
+    if failure is not None:
+        raise InputError(f"garment {entry.type_name}:{entry.seed} could not be sewn on its body: {failure}; name "
+                         "another seed or design (`python -m benchmarks sewing-survey` shows which sew)")
+    return garment
+
+
+def build_instance(entry: GarmentEntry, body_model, betas, edge_length: float | None, run_config=None,
+                   device: str = "cpu"):
+    """(garment, failure): the :class:`~datagen.garment.mesh.GarmentMesh` of ``entry`` on the body of
+    shape ``betas`` (rest pose), and why it cannot be sewn (a :class:`~datagen.sim.metrics.Failure`,
+    code ``seam``) or None.
+
+    A shell comes from the garment cache; a pattern garment is fitted to the body's measurements (a
+    program) or read from its file, meshed at ``edge_length`` (default :data:`PATTERN_EDGE_LENGTH`),
+    placed around the body and, given the run's ``run_config`` (a
+    :class:`~datagen.sim.scene.RunConfig`), sewn there on warp ``device`` and welded
+    (:func:`sewn_garment`). A design that cannot be sewn comes back as what sewing left (welded, not
+    settled; the placed panels if it never welded) with its failure: a dataset records its scenes as
+    failed."""
     if entry.kind == "shell":
         from datagen.garment.cache import cached_garment
 
-        return cached_garment(entry.name, body_model, betas, seed=entry.seed, target_edge_length=edge_length)
+        return cached_garment(entry.name, body_model, betas, seed=entry.seed, target_edge_length=edge_length), None
+    placed = placed_garment(entry, body_model, betas, edge_length, to_sew=run_config is not None)
+    return (placed, None) if run_config is None else sewn_garment(entry, placed, body_model, betas, run_config, device)
+
+
+def placed_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None, *, to_sew: bool):
+    """The pattern garment of ``entry`` (a program's design fitted to the body of shape ``betas``, or
+    its file's) meshed at ``edge_length`` (default :data:`PATTERN_EDGE_LENGTH`) and placed around the
+    body at rest: flat panels where the pattern puts them when it is ``to_sew``
+    (:data:`datagen.sim.sewing.PLACEMENT`), else wrapped around the body."""
     from datagen.garment.pattern.garment import pattern_garment, stand_on_floor
     from datagen.sim.sewing import PLACEMENT
 
@@ -172,50 +203,83 @@ def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | N
         pattern = read_spec(entry.path)
         if spec_frame(entry.path) == "garmentcode":
             pattern = stand_on_floor(pattern, body_v)
-    placed = pattern_garment(pattern, body_v, body_f, edge_length=edge_length or PATTERN_EDGE_LENGTH,
-                             seed=entry.seed if entry.kind == "program" else None, betas=betas,
-                             mode=PLACEMENT if run_config is not None else "wrap")
-    return placed if run_config is None else sewn_garment(entry, placed, body_model, betas, run_config)
+    return pattern_garment(pattern, body_v, body_f, edge_length=edge_length or PATTERN_EDGE_LENGTH,
+                           seed=entry.seed if entry.kind == "program" else None, betas=betas,
+                           mode=PLACEMENT if to_sew else "wrap")
 
 
-def sewn_garment(entry: GarmentEntry, placed, body_model, betas, run_config):
-    """``placed`` (a pattern garment around the body at rest) sewn there with the run's sewing, solver
-    settings and gates on the CPU and welded (:func:`datagen.sim.sewing.sew`), kept in the garment
-    cache under everything it depends on (the placed panels, the body, the settings). A design that
-    cannot be sewn is refused with the reason: the config should name another seed or design."""
-    import os
-    import uuid
-
+def sewn_cache_path(entry: GarmentEntry, placed, body_model, betas, run_config) -> Path:
+    """Where the garment cache keeps ``placed`` sewn on the body of shape ``betas`` with the run's
+    sewing, solver settings and gates: a name made of everything the result depends on (the placed
+    panels, the body, the settings; not the device, so a CPU run and a GPU run share what either
+    sewed: the two differ by float rounding)."""
     from datagen.body.cache import cache_root
-    from datagen.body.skeleton import face_parts
-    from datagen.garment.mesh import load_garment
-    from datagen.sim.sewing import sew
 
     body_v = np.asarray(body_model.shaped(np.asarray(betas, float).reshape(1, -1)))[0]
     h = hashlib.sha256(json.dumps([str(entry), dataclasses.asdict(run_config.sewing), repr(run_config.solver),
                                    repr(run_config.thresholds)], default=str).encode())
     for a in (placed.vertices, placed.faces, placed.stitch_pairs, body_v):
         h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
-    path = cache_root() / "garments" / f"sewn-{entry.name}-{entry.seed}-{h.hexdigest()[:20]}.npz"
+    return cache_root() / "garments" / f"sewn-{entry.name}-{entry.seed}-{h.hexdigest()[:20]}.npz"
+
+
+def failure_path(path: Path) -> Path:
+    """The file beside a sewn garment's cache file that says why it could not be sewn (JSON)."""
+    return path.with_name(path.stem + ".failure.json")
+
+
+def sewn_garment(entry: GarmentEntry, placed, body_model, betas, run_config, device: str = "cpu"):
+    """(garment, failure): ``placed`` (a pattern garment around the body at rest) sewn there with the
+    run's sewing, solver settings and gates on warp ``device`` and welded
+    (:func:`datagen.sim.sewing.sew`), and None; or, for a design that cannot be sewn, what sewing
+    left and its :class:`~datagen.sim.metrics.Failure` (code ``seam``, the reason). Both are kept in
+    the garment cache (:func:`sewn_cache_path`; a failure in :func:`failure_path` beside it), so a
+    design is sewn once whichever process asks."""
+    import os
+    import uuid
+
+    from datagen.body.skeleton import face_parts
+    from datagen.garment.mesh import load_garment
+    from datagen.sim.metrics import Failure
+    from datagen.sim.sewing import sew
+
+    path = sewn_cache_path(entry, placed, body_model, betas, run_config)
+    why = failure_path(path)
     if path.is_file():
         try:
-            return load_garment(path)
+            garment = load_garment(path)
+            failure = Failure(**json.loads(why.read_text())) if why.is_file() else None
+            return garment, failure
         except Exception as e:  # noqa: BLE001 - a damaged cache file is sewn again
             log.warning("sewn garment cache file %s does not read back (%s); sewing again", path, e)
-    r = sew(placed, body_v, np.asarray(body_model.faces), body_face_part=face_parts(body_model.weights, body_model.faces),
-            config=run_config.sewing, solver=run_config.solver, thresholds=run_config.thresholds, device="cpu")
-    if r.failure is not None:
-        raise InputError(f"garment {entry.type_name}:{entry.seed} could not be sewn on its body: {r.failure}; name another seed or design "
-                         f"(`python -m benchmarks sewing-survey` shows which sew)")
-    log.info("garment %s:%d sewn in %d frames, static after %d, %.1f s", entry.type_name, entry.seed, r.sew_frames, r.settle_frames, r.seconds)
+    body_v = np.asarray(body_model.shaped(np.asarray(betas, float).reshape(1, -1)))[0]
+    name = f"{entry.type_name}:{entry.seed}"
+    try:
+        r = sew(placed, body_v, np.asarray(body_model.faces),
+                body_face_part=face_parts(body_model.weights, body_model.faces), config=run_config.sewing,
+                solver=run_config.solver, thresholds=run_config.thresholds, device=device)
+        garment, failure = (placed if r.garment is None else r.garment), r.failure
+    except InputError as e:  # the design itself (no stitches, a stitch inside one triangle): it cannot be sewn
+        garment, failure, r = placed, Failure("seam", str(e)), None
+    if failure is None:
+        log.info("garment %s sewn on %s in %d frames, static after %d, %.1f s", name, device, r.sew_frames,
+                 r.settle_frames, r.seconds)
+    else:
+        log.warning("garment %s could not be sewn on its body (%s); its scenes are recorded as failed", name, failure)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        if failure is not None:  # the reason first: the garment file's presence says the result is complete
+            tmp = why.with_name(f".{why.name}.{uuid.uuid4().hex}.tmp")
+            tmp.write_text(json.dumps({"code": failure.code, "message": failure.message}))
+            os.replace(tmp, why)
+        else:
+            why.unlink(missing_ok=True)
         tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp.npz")
-        r.garment.save(tmp)
+        garment.save(tmp)
         os.replace(tmp, path)
     except OSError as e:  # the cache is a convenience
         log.warning("could not cache the sewn garment in %s: %s", path.parent, e)
-    return r.garment
+    return garment, failure
 
 
 def design_record(entry: GarmentEntry, garment) -> dict | None:

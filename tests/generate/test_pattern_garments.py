@@ -1,7 +1,7 @@
 """Pattern garments in ``drape generate`` configs: the entries (``pattern:PROGRAM:SEED``,
 ``spec:PATH``), their identity for split disjointness, the pattern presets, and (slow) a micro
 store that mixes a pattern garment with a shell: its pattern fields, its settled templates and its
-USD export."""
+USD export; and a store with a design that cannot be sewn: its scenes are failed, the others made."""
 
 from __future__ import annotations
 
@@ -146,7 +146,11 @@ def test_a_micro_store_keeps_the_pattern_and_the_settled_templates(tmp_path, cap
         m = s.garment(g)
         built = plan.garment(g)
         np.testing.assert_allclose(m["built_vertices"], built.vertices, atol=1e-6)
-        assert m["settled"] == 1 and np.abs(m["rest_vertices"] - m["built_vertices"]).max() > 1e-3
+        assert m["settled"] == 1
+        if m["design"] is None:  # a shell: settled at rest from its construction for its template
+            assert np.abs(m["rest_vertices"] - m["built_vertices"]).max() > 1e-3
+        else:  # sewn and settled until static before: its own template, not settled again
+            assert np.array_equal(m["rest_vertices"], m["built_vertices"])
         if types[m["type"]] == "pattern:skirt_straight":
             assert m["seed"] == 1 and m["design"]["program"] == "skirt_straight" and m["design"]["seed"] == 1
             assert m["design"]["pattern"]["pattern"]["panels"] and m["design"]["parameters"]
@@ -199,3 +203,51 @@ def test_settled_is_the_rest_settle_in_the_garments_own_frame():
     templates, settled, figures = settle_templates(plan, [garment], None)
     assert settled.tolist() == [1] and not figures["failed"]
     assert np.array_equal(templates[0], results[1].settled.astype(np.float64))
+
+
+@pytest.mark.slow
+def test_a_design_that_cannot_be_sewn_fails_its_scenes_and_the_run_goes_on(tmp_path, capsys):
+    """A pattern skirt given one frame to close its seams cannot be sewn (no fake: the sewing runs and
+    its seams are still centimetres apart): the run does not stop; the skirt's scenes are staged as
+    failed with code ``seam`` and are never simulated (no frames, no metrics, failure frame -1), its
+    instance is not settled (its template is what sewing left); the T-shirt beside it is simulated and
+    settled as ever; the store validates and ``drape info`` lists the ``seam`` failures. The failure is
+    kept in the garment cache with the garment: asked again, the design is not sewn again."""
+    from schemas.dataset import FAILURE_NAMES
+
+    from datagen.cli import main
+    from datagen.generate.garments import failure_path, placed_garment, sewn_cache_path
+    from datagen.generate.plan import Plan
+    from datagen.generate.run import generate
+    from datagen.store import open_store, validate
+
+    lenient = {"stretch": 10.0, "penetration_depth": 1.0, "penetration_share": 1.0, "self_intersections": 100000,
+               "slip": 10.0}
+    cfg = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "thresholds": lenient,
+                                                              "sewing": {"sew_frames": 1}},
+                                      "train": {**MICRO["train"], "motions": ["walk:0", "wave:0"]}})
+    out = tmp_path / "unsewn.zarr"
+    summary = generate(cfg, out, workers=0)
+    assert summary["complete"] and summary["samples"] == 4
+    assert validate(out) == []
+    s = open_store(out)
+    types = s.names["garment_type_names"]
+    skirt = next(g for g in range(s.garment_count) if types[s.garment(g)["type"]] == "pattern:skirt_straight")
+    assert s.garment(skirt)["settled"] == 0 and s.garment(1 - skirt)["settled"] == 1
+    seam = FAILURE_NAMES.index("seam")
+    for i in range(len(s)):
+        sc = s.scalars(i)
+        if sc["garment"] == skirt:
+            assert (sc["failure"], sc["failure_frame"], sc["recorded_from"]) == (seam, -1, 0)
+        else:
+            assert sc["failure"] != seam  # simulated (the lenient gates let the toy solve through)
+    plan = Plan(cfg)
+    failure = plan.sew_failure(skirt)
+    assert failure.code == "seam" and "open after 1 frames of sewing" in failure.message
+    entry = plan.entry(skirt)
+    placed = placed_garment(entry, plan.body_model, plan.betas[0], cfg.garment_edge_length, to_sew=True)
+    assert failure_path(sewn_cache_path(entry, placed, plan.body_model, plan.betas[0], cfg.simulation)).is_file()
+    assert main(["info", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "seam" in printed and "0 settled: not settled" in printed
+
