@@ -35,7 +35,7 @@ class Plan:
     def __init__(self, config: DatasetConfig):
         self.config = config
         self._garments: dict[int, object] = {}  # instance -> GarmentMesh, built on first use
-        self._sew_failures: dict[int, object] = {}  # instance -> why it could not be sewn (Failure) or None
+        self._sewing: dict[int, object] = {}  # instance -> how it was sewn (SewingRecord), None for a shell
         self.sew_device = "cpu"  # the warp device a pattern garment not in the garment cache is sewn on
         self._correspondences: dict[int, dict] = {}  # instance -> garment_correspondence(...)
         self._motion_cache: dict[int, object] = {}  # motion index -> Motion, made on first use
@@ -118,17 +118,23 @@ class Plan:
             from datagen.generate.garments import build_instance
 
             b = self.bodies.index(self.instances[g][1])
-            cache[g], self._sew_failures[g] = build_instance(self.entry(g), self.body_model, self.betas[b],
-                                                             self.config.garment_edge_length, self.run_config,
-                                                             self.sew_device)
+            cache[g], self._sewing[g] = build_instance(self.entry(g), self.body_model, self.betas[b],
+                                                       self.config.garment_edge_length, self.run_config,
+                                                       self.sew_device)
         return cache[g]
+
+    def sewing(self, g: int):
+        """How garment instance g was sewn (a :class:`~datagen.generate.garments.SewingRecord`), or
+        None for a shell."""
+        self.garment(g)
+        return self._sewing[g]
 
     def sew_failure(self, g: int):
         """Why garment instance g could not be sewn on its body (a
         :class:`~datagen.sim.metrics.Failure`, code ``seam``), or None (sewn, or a shell): its scenes
         are then not simulated and recorded as failed with it."""
-        self.garment(g)
-        return self._sew_failures[g]
+        record = self.sewing(g)
+        return None if record is None else record.failure
 
     def entry(self, g: int):
         """The parsed config entry of garment instance g (:class:`~datagen.generate.garments.GarmentEntry`)."""

@@ -15,22 +15,33 @@ log = logging.getLogger(__name__)
 _SEW_PLAN: dict = {}
 
 
-def _sew_worker_init(config, devices=None) -> None:
-    """A sewing process: its plan, and with ``devices`` (a queue of CUDA device names, one per
-    process) the one GPU it sews on, made its only visible one before CUDA starts."""
+def _sew_worker_init(config, devices) -> None:
+    """A sewing process: its plan and the device it sews on, taken from ``devices`` (a queue of
+    device names, one per process): ``cpu``, or a GPU, made the process's only visible one before
+    CUDA starts (:func:`~datagen.generate.devices.pin_gpu`)."""
+    import contextlib
+    import os
+
     from datagen.generate.devices import pin_gpu
 
+    device = pin_gpu(devices.get())
+    os.environ.setdefault("OMP_NUM_THREADS", "1")  # the processes themselves are the parallelism
+    if logging.getLogger().level > logging.DEBUG:  # warp's banner and compile lines: once, from the main process
+        with contextlib.suppress(ImportError):
+            from datagen.sim.device import quiet_warp
+
+            quiet_warp(logging.ERROR, initialise=True)
     plan = Plan(config)
-    plan.sew_device = "cpu" if devices is None else pin_gpu(devices.get())
+    plan.sew_device = device
     _SEW_PLAN["plan"] = plan
 
 
-def _sew_one(g: int) -> tuple[int, float, str | None]:
-    """Sew instance g into the garment cache (where the main process reads it): (g, seconds, why it
-    could not be sewn or None)."""
+def _sew_one(g: int):
+    """Sew instance g into the garment cache (where the main process reads it): (g, seconds, its
+    :class:`~datagen.generate.garments.SewingRecord`)."""
     t = time.perf_counter()
-    failure = _SEW_PLAN["plan"].sew_failure(g)
-    return g, time.perf_counter() - t, None if failure is None else str(failure)
+    record = _SEW_PLAN["plan"].sewing(g)
+    return g, time.perf_counter() - t, record
 
 
 def sew_devices(devices) -> tuple[list[str], bool]:
@@ -65,12 +76,14 @@ def sew_patterns(plan: Plan, workers: int | None, devices=(None,), progress=None
     t0 = time.perf_counter()
     failed = 0
 
-    def done(k: int, g: int, seconds: float, why: str | None) -> None:
+    def done(k: int, g: int, seconds: float, record) -> None:
         nonlocal failed
-        failed += why is not None
-        log.info("sewing %d/%d: %s on %s %s in %.0f s (%.0f s so far)%s", k, len(todo), *plan.instances[g],
-                 "could not be sewn" if why else "sewn", seconds, time.perf_counter() - t0,
-                 f": {why}; its scenes are recorded as failed" if why else "")
+        failed += record.failure is not None
+        what = (f"could not be sewn ({record.failure}; its scenes are recorded as failed)" if record.failure else
+                f"sewn, static after {record.settle_frames} settling frames" if record.static else
+                "sewn, not static when settling stopped (its template is settled again)")
+        log.info("sewing %d/%d: %s on %s %s, %.0f s (%.0f s so far)", k, len(todo), *plan.instances[g], what,
+                 seconds, time.perf_counter() - t0)
         if progress:
             progress(k, len(todo))
 
@@ -83,15 +96,13 @@ def sew_patterns(plan: Plan, workers: int | None, devices=(None,), progress=None
         plan.sew_device = names[0]
         for k, g in enumerate(todo, 1):
             t = time.perf_counter()
-            failure = plan.sew_failure(g)
-            done(k, g, time.perf_counter() - t, None if failure is None else str(failure))
+            record = plan.sewing(g)
+            done(k, g, time.perf_counter() - t, record)
     else:
         ctx = multiprocessing.get_context("spawn")
-        queue = None
-        if on_gpu:
-            queue = ctx.Queue()
-            for n in names:
-                queue.put(n)
+        queue = ctx.Queue()  # each process takes its device (its own GPU, or the CPU) before anything starts
+        for n in names if on_gpu else ["cpu"] * procs:
+            queue.put(n)
         with ProcessPoolExecutor(procs, mp_context=ctx, initializer=_sew_worker_init,
                                  initargs=(plan.config, queue)) as pool:
             futures = [pool.submit(_sew_one, g) for g in todo]
