@@ -101,9 +101,9 @@ def _cmd_generate(args) -> int:
     print(f"each scene simulates {sim} frames: {ph['settle_rest']} settling in the rest pose, {ph['lead_in']} leading "
           f"into the motion's first pose, {ph['settle_pose']} holding it and {ph['ramp']} ramping into the motion, then "
           f"the {ph['recorded']} that are recorded; first, each pattern garment instance is sewn on its body and "
-          f"settled until static (at most {rc.sewing.most_frames()} frames: its template) and each shell instance "
-          f"settles once at rest for its template ({settled_frame(settle_config(rc)) + 1} frames in the rest pose)",
-          flush=True)
+          f"settled (at most {rc.sewing.most_frames()} frames; once static, that is its template) and each other "
+          f"instance settles once at rest for its template ({settled_frame(settle_config(rc)) + 1} frames in the "
+          "rest pose)", flush=True)
     side_by_side = args.executor == "ray" or "," in str(args.device)
     # Ray's tasks, or several devices, run side by side: the frame bar follows the furthest; else a
     # new batch restarts it
