@@ -157,8 +157,8 @@ def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | N
     """
     garment, sewing = build_instance(entry, body_model, betas, edge_length, run_config, device)
     if sewing is not None and sewing.failure is not None:
-        raise InputError(f"garment {entry.type_name}:{entry.seed} could not be sewn on its body: {sewing.failure}; name "
-                         "another seed or design (`python -m benchmarks sewing-survey` shows which sew)")
+        raise InputError(f"garment {entry.type_name}:{entry.seed} could not be sewn on its body: {sewing.failure}; "
+                         "name another seed or design (`python -m benchmarks sewing-survey` shows which sew)")
     return garment
 
 

@@ -50,8 +50,8 @@ def settle_templates(plan, garments: list, device: str | None = None) -> tuple[l
     its body here, in batches of the config's ``batch_size`` on ``device``.
 
     Args:
-        plan: the dataset's :class:`~datagen.generate.plan.Plan` (its :meth:`~datagen.generate.plan.Plan.sew_failure`
-            says which pattern garments could not be sewn).
+        plan: the dataset's :class:`~datagen.generate.plan.Plan` (its :meth:`~datagen.generate.plan.Plan.sewing`
+            says how each pattern garment was sewn).
         garments: its garment instances (:class:`~datagen.garment.mesh.GarmentMesh`, in order).
         device: warp device (None: warp's default).
 
