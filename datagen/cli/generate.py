@@ -100,17 +100,22 @@ def _cmd_generate(args) -> int:
     ph = rc.phases(config.frames, config.fps)
     print(f"each scene simulates {sim} frames: {ph['settle_rest']} settling in the rest pose, {ph['lead_in']} leading "
           f"into the motion's first pose, {ph['settle_pose']} holding it and {ph['ramp']} ramping into the motion, then "
-          f"the {ph['recorded']} that are recorded; first, each garment instance settles once at rest for its "
-          f"template ({settled_frame(settle_config(rc)) + 1} frames in the rest pose)", flush=True)
+          f"the {ph['recorded']} that are recorded; first, each pattern garment instance is sewn on its body and "
+          f"settled (at most {rc.sewing.most_frames()} frames; once static, that is its template) and each other "
+          f"instance settles once at rest for its template ({settled_frame(settle_config(rc)) + 1} frames in the "
+          "rest pose)", flush=True)
     side_by_side = args.executor == "ray" or "," in str(args.device)
     # Ray's tasks, or several devices, run side by side: the frame bar follows the furthest; else a
     # new batch restarts it
     frame_bar = reporter("frames", "frame", follow_furthest=side_by_side)
     scene_bar = reporter("scenes", "scene", follow_furthest=True)
+    sew_bar = reporter("sewing", "garment", follow_furthest=True)
 
     def progress(kind, done, total, batch):
         if kind == 0:
             frame_bar(done, total, desc=f"batch of {batch} scenes")
+        elif kind == 2:
+            sew_bar(done, total)
         else:
             scene_bar(done, total)
 
@@ -120,6 +125,7 @@ def _cmd_generate(args) -> int:
     finally:
         frame_bar.close()
         scene_bar.close()
+        sew_bar.close()
     if not summary["complete"]:
         print(f"time limit of {args.time_limit:g} min: simulated {summary['simulated']} scenes in "
               f"{summary['batches']} batch(es) ({summary['seconds']:.0f} s, the simulator "

@@ -20,6 +20,7 @@ import dataclasses
 import hashlib
 import json
 import logging
+import time
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -146,16 +147,47 @@ def store_type_names() -> list[str]:
     return [*garment_type_names(), *(PATTERN_PREFIX + p for p in PROGRAMS), FILE_TYPE]
 
 
-def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None, run_config=None):
+def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None, run_config=None,
+                  device: str = "cpu"):
     """The :class:`~datagen.garment.mesh.GarmentMesh` of ``entry`` on the body of shape ``betas``
-    (rest pose): a shell from the garment cache, or a pattern garment fitted to the body's
-    measurements (a program) or read from its file, meshed at ``edge_length`` (default
-    :data:`PATTERN_EDGE_LENGTH`), placed around the body and, given the run's ``run_config`` (a
-    :class:`~datagen.sim.scene.RunConfig`), sewn there and welded (:func:`sewn_garment`)."""
+    (:func:`build_instance`), for a caller that needs a garment to simulate.
+
+    Raises:
+        InputError: a pattern garment that cannot be sewn on its body, with the reason.
+    """
+    garment, sewing = build_instance(entry, body_model, betas, edge_length, run_config, device)
+    if sewing is not None and sewing.failure is not None:
+        raise InputError(f"garment {entry.type_name}:{entry.seed} could not be sewn on its body: {sewing.failure}; "
+                         "name another seed or design (`python -m benchmarks sewing-survey` shows which sew)")
+    return garment
+
+
+def build_instance(entry: GarmentEntry, body_model, betas, edge_length: float | None, run_config=None,
+                   device: str = "cpu"):
+    """(garment, sewing): the :class:`~datagen.garment.mesh.GarmentMesh` of ``entry`` on the body of
+    shape ``betas`` (rest pose), and how it was sewn (a :class:`SewingRecord`: whether it could be,
+    whether it got static) or None (a shell, or a pattern garment not sewn: no ``run_config``).
+
+    A shell comes from the garment cache; a pattern garment is fitted to the body's measurements (a
+    program) or read from its file, meshed at ``edge_length`` (default :data:`PATTERN_EDGE_LENGTH`),
+    placed around the body and, given the run's ``run_config`` (a
+    :class:`~datagen.sim.scene.RunConfig`), sewn there on warp ``device`` and welded
+    (:func:`sewn_garment`). A design that cannot be sewn comes back as what sewing left (welded, not
+    settled; the placed panels if it never welded) with its record's failure: a dataset records its
+    scenes as failed."""
     if entry.kind == "shell":
         from datagen.garment.cache import cached_garment
 
-        return cached_garment(entry.name, body_model, betas, seed=entry.seed, target_edge_length=edge_length)
+        return cached_garment(entry.name, body_model, betas, seed=entry.seed, target_edge_length=edge_length), None
+    placed = placed_garment(entry, body_model, betas, edge_length, to_sew=run_config is not None)
+    return (placed, None) if run_config is None else sewn_garment(entry, placed, body_model, betas, run_config, device)
+
+
+def placed_garment(entry: GarmentEntry, body_model, betas, edge_length: float | None, *, to_sew: bool):
+    """The pattern garment of ``entry`` (a program's design fitted to the body of shape ``betas``, or
+    its file's) meshed at ``edge_length`` (default :data:`PATTERN_EDGE_LENGTH`) and placed around the
+    body at rest: flat panels where the pattern puts them when it is ``to_sew``
+    (:data:`datagen.sim.sewing.PLACEMENT`), else wrapped around the body."""
     from datagen.garment.pattern.garment import pattern_garment, stand_on_floor
     from datagen.sim.sewing import PLACEMENT
 
@@ -172,50 +204,124 @@ def build_garment(entry: GarmentEntry, body_model, betas, edge_length: float | N
         pattern = read_spec(entry.path)
         if spec_frame(entry.path) == "garmentcode":
             pattern = stand_on_floor(pattern, body_v)
-    placed = pattern_garment(pattern, body_v, body_f, edge_length=edge_length or PATTERN_EDGE_LENGTH,
-                             seed=entry.seed if entry.kind == "program" else None, betas=betas,
-                             mode=PLACEMENT if run_config is not None else "wrap")
-    return placed if run_config is None else sewn_garment(entry, placed, body_model, betas, run_config)
+    return pattern_garment(pattern, body_v, body_f, edge_length=edge_length or PATTERN_EDGE_LENGTH,
+                           seed=entry.seed if entry.kind == "program" else None, betas=betas,
+                           mode=PLACEMENT if to_sew else "wrap")
 
 
-def sewn_garment(entry: GarmentEntry, placed, body_model, betas, run_config):
-    """``placed`` (a pattern garment around the body at rest) sewn there with the run's sewing, solver
-    settings and gates on the CPU and welded (:func:`datagen.sim.sewing.sew`), kept in the garment
-    cache under everything it depends on (the placed panels, the body, the settings). A design that
-    cannot be sewn is refused with the reason: the config should name another seed or design."""
-    import os
-    import uuid
-
+def sewn_cache_path(entry: GarmentEntry, placed, body_model, betas, run_config) -> Path:
+    """Where the garment cache keeps ``placed`` sewn on the body of shape ``betas`` with the run's
+    sewing, solver settings and gates: a name made of everything the result depends on (the placed
+    panels, the body, the settings; not the device, so a CPU run and a GPU run share what either
+    sewed: the two differ by float rounding)."""
     from datagen.body.cache import cache_root
-    from datagen.body.skeleton import face_parts
-    from datagen.garment.mesh import load_garment
-    from datagen.sim.sewing import sew
 
     body_v = np.asarray(body_model.shaped(np.asarray(betas, float).reshape(1, -1)))[0]
     h = hashlib.sha256(json.dumps([str(entry), dataclasses.asdict(run_config.sewing), repr(run_config.solver),
                                    repr(run_config.thresholds)], default=str).encode())
     for a in (placed.vertices, placed.faces, placed.stitch_pairs, body_v):
         h.update(np.ascontiguousarray(a, dtype=np.float64).tobytes())
-    path = cache_root() / "garments" / f"sewn-{entry.name}-{entry.seed}-{h.hexdigest()[:20]}.npz"
+    return cache_root() / "garments" / f"sewn-{entry.name}-{entry.seed}-{h.hexdigest()[:20]}.npz"
+
+
+def record_path(path: Path) -> Path:
+    """The file beside a sewn garment's cache file that records how it was sewn (:class:`SewingRecord`, JSON)."""
+    return path.with_name(path.stem + ".sewing.json")
+
+
+@dataclass(frozen=True, kw_only=True)
+class SewingRecord:
+    """How a pattern garment instance was sewn (:func:`datagen.sim.sewing.sew`), kept beside it in the
+    garment cache.
+
+    Attributes:
+        failure: why it could not be sewn (a :class:`~datagen.sim.metrics.Failure`, code ``seam``), or None.
+        sew_frames: frames sewing took to close the seams (-1: they did not close, or not known).
+        settle_frames: frames its settle under gravity took to be static (-1: it did not get static
+            within ``sewing.settle_frames``, or not known: a garment cached without its record).
+        seconds: wall time of the sewing [s] (0 when not known).
+        device: the warp device it was sewn on ("" when not known).
+    """
+
+    failure: object = None
+    sew_frames: int = -1
+    settle_frames: int = -1
+    seconds: float = 0.0
+    device: str = ""
+
+    @property
+    def static(self) -> bool:
+        """Sewn and settled until static: its drape is its template (not settled again)."""
+        return self.failure is None and self.settle_frames >= 0
+
+    def to_json(self) -> str:
+        failure = None if self.failure is None else {"code": self.failure.code, "message": self.failure.message}
+        return json.dumps({**dataclasses.asdict(self), "failure": failure})
+
+    @classmethod
+    def from_json(cls, text: str) -> SewingRecord:
+        from datagen.sim.metrics import Failure
+
+        d = json.loads(text)
+        return cls(**{**d, "failure": None if d["failure"] is None else Failure(**d["failure"])})
+
+
+def sewn_garment(entry: GarmentEntry, placed, body_model, betas, run_config, device: str = "cpu"):
+    """(garment, record): ``placed`` (a pattern garment around the body at rest) sewn there with the
+    run's sewing, solver settings and gates on warp ``device`` and welded
+    (:func:`datagen.sim.sewing.sew`), and its :class:`SewingRecord`; for a design that cannot be
+    sewn, what sewing left and the record of its failure (code ``seam``, the reason). Both are kept in
+    the garment cache (:func:`sewn_cache_path`, the record in :func:`record_path` beside it), so a
+    design is sewn once whichever process asks; a garment cached without its record (older code,
+    which cached only what sewed) reads as sewn, not known to be static."""
+    import os
+    import uuid
+
+    from datagen.body.skeleton import face_parts
+    from datagen.garment.mesh import load_garment
+    from datagen.sim.metrics import Failure
+    from datagen.sim.sewing import sew
+
+    path = sewn_cache_path(entry, placed, body_model, betas, run_config)
+    record_file = record_path(path)
     if path.is_file():
         try:
-            return load_garment(path)
+            garment = load_garment(path)
+            return garment, SewingRecord.from_json(record_file.read_text()) if record_file.is_file() else SewingRecord()
         except Exception as e:  # noqa: BLE001 - a damaged cache file is sewn again
             log.warning("sewn garment cache file %s does not read back (%s); sewing again", path, e)
-    r = sew(placed, body_v, np.asarray(body_model.faces), body_face_part=face_parts(body_model.weights, body_model.faces),
-            config=run_config.sewing, solver=run_config.solver, thresholds=run_config.thresholds, device="cpu")
-    if r.failure is not None:
-        raise InputError(f"garment {entry.type_name}:{entry.seed} could not be sewn on its body: {r.failure}; name another seed or design "
-                         f"(`python -m benchmarks sewing-survey` shows which sew)")
-    log.info("garment %s:%d sewn in %d frames, static after %d, %.1f s", entry.type_name, entry.seed, r.sew_frames, r.settle_frames, r.seconds)
+    body_v = np.asarray(body_model.shaped(np.asarray(betas, float).reshape(1, -1)))[0]
+    name = f"{entry.type_name}:{entry.seed}"
+    t0 = time.perf_counter()
+    try:
+        r = sew(placed, body_v, np.asarray(body_model.faces),
+                body_face_part=face_parts(body_model.weights, body_model.faces), config=run_config.sewing,
+                solver=run_config.solver, thresholds=run_config.thresholds, device=device)
+        garment = placed if r.garment is None else r.garment
+        record = SewingRecord(failure=r.failure, sew_frames=r.sew_frames, settle_frames=r.settle_frames,
+                              seconds=r.seconds, device=str(device))
+    except InputError as e:  # the design itself (no stitches, a stitch inside one triangle): it cannot be sewn
+        garment = placed
+        record = SewingRecord(failure=Failure("seam", str(e)), seconds=time.perf_counter() - t0, device=str(device))
+    if record.failure is None:
+        log.info("garment %s sewn on %s in %d frames, %s, %.1f s", name, device, record.sew_frames,
+                 f"static after {record.settle_frames} frames" if record.static else
+                 f"not static after {run_config.sewing.settle_frames} frames of settling", record.seconds)
+    else:
+        log.warning("garment %s could not be sewn on its body (%s); its scenes are recorded as failed", name,
+                    record.failure)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
+        # the record first: the garment file's presence says the result is complete
+        tmp = record_file.with_name(f".{record_file.name}.{uuid.uuid4().hex}.tmp")
+        tmp.write_text(record.to_json())
+        os.replace(tmp, record_file)
         tmp = path.with_name(f".{path.name}.{uuid.uuid4().hex}.tmp.npz")
-        r.garment.save(tmp)
+        garment.save(tmp)
         os.replace(tmp, path)
     except OSError as e:  # the cache is a convenience
         log.warning("could not cache the sewn garment in %s: %s", path.parent, e)
-    return r.garment
+    return garment, record
 
 
 def design_record(entry: GarmentEntry, garment) -> dict | None:

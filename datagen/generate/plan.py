@@ -35,6 +35,8 @@ class Plan:
     def __init__(self, config: DatasetConfig):
         self.config = config
         self._garments: dict[int, object] = {}  # instance -> GarmentMesh, built on first use
+        self._sewing: dict[int, object] = {}  # instance -> how it was sewn (SewingRecord), None for a shell
+        self.sew_device = "cpu"  # the warp device a pattern garment not in the garment cache is sewn on
         self._correspondences: dict[int, dict] = {}  # instance -> garment_correspondence(...)
         self._motion_cache: dict[int, object] = {}  # motion index -> Motion, made on first use
         self.fit_diagnostics: dict | None = None  # set by static_groups()
@@ -108,15 +110,31 @@ class Plan:
         return g in self._garments
 
     def garment(self, g: int):
-        """Garment instance g (built once per process)."""
+        """Garment instance g (built once per process; a pattern garment sewn on :attr:`sew_device`
+        unless the garment cache has it). A design that cannot be sewn is what sewing left
+        (:meth:`sew_failure` says why)."""
         cache = self._garments
         if g not in cache:
-            from datagen.generate.garments import build_garment
+            from datagen.generate.garments import build_instance
 
             b = self.bodies.index(self.instances[g][1])
-            cache[g] = build_garment(self.entry(g), self.body_model, self.betas[b], self.config.garment_edge_length,
-                                     self.run_config)
+            cache[g], self._sewing[g] = build_instance(self.entry(g), self.body_model, self.betas[b],
+                                                       self.config.garment_edge_length, self.run_config,
+                                                       self.sew_device)
         return cache[g]
+
+    def sewing(self, g: int):
+        """How garment instance g was sewn (a :class:`~datagen.generate.garments.SewingRecord`), or
+        None for a shell."""
+        self.garment(g)
+        return self._sewing[g]
+
+    def sew_failure(self, g: int):
+        """Why garment instance g could not be sewn on its body (a
+        :class:`~datagen.sim.metrics.Failure`, code ``seam``), or None (sewn, or a shell): its scenes
+        are then not simulated and recorded as failed with it."""
+        record = self.sewing(g)
+        return None if record is None else record.failure
 
     def entry(self, g: int):
         """The parsed config entry of garment instance g (:class:`~datagen.generate.garments.GarmentEntry`)."""
@@ -140,37 +158,6 @@ class Plan:
 
 
 # --------------------------------------------------------------------------------- static groups
-
-
-_SEW_PLAN: dict = {}
-
-
-def _sew_worker_init(config) -> None:
-    _SEW_PLAN["plan"] = Plan(config)
-
-
-def _sew_one(g: int) -> int:
-    _SEW_PLAN["plan"].garment(g)  # sewn into the garment cache, where the main process reads it
-    return g
-
-
-def sew_patterns(plan: Plan, workers: int | None) -> None:
-    """Sew the plan's pattern garment instances not in the garment cache yet, ``workers`` processes at
-    once (a design sews in a minute or two on one CPU core; one by one they would hold up the start).
-    A design that cannot be sewn is refused here, before any scene is simulated."""
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor
-
-    todo = [g for g in range(len(plan.instances)) if plan.entry(g).is_pattern and not plan.has_garment(g)]
-    workers = min(len(todo), workers if workers is not None else 1)
-    if len(todo) < 2 or workers < 2:
-        return  # built one by one where they are first needed
-    t0 = time.perf_counter()
-    log.info("sewing %d pattern garment instances on %d processes", len(todo), workers)
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("spawn"), initializer=_sew_worker_init,
-                             initargs=(plan.config,)) as pool:
-        for done, g in enumerate(pool.map(_sew_one, todo), 1):
-            log.info("sewn %d/%d (%s on %s), %.0f s so far", done, len(todo), *plan.instances[g], time.perf_counter() - t0)
 
 
 def static_groups(plan: Plan, device: str | None = None) -> dict[str, tuple[dict, dict | None]]:

@@ -28,7 +28,8 @@ from pathlib import Path
 from datagen.errors import InputError
 from datagen.generate.config import DatasetConfig, parse_garment
 from datagen.generate.devices import parse_devices, run_on_devices
-from datagen.generate.plan import Plan, open_writer, sew_patterns, static_groups
+from datagen.generate.plan import Plan, open_writer, static_groups
+from datagen.generate.sewing import sew_devices, sew_patterns
 from datagen.generate.samples import default_workers, simulate_samples
 
 log = logging.getLogger(__name__)
@@ -49,6 +50,9 @@ def generate(config: DatasetConfig, out: str | Path, *, executor: str = "local",
         workers: local: processes beside the simulating one (default
             :func:`~datagen.generate.samples.default_workers`; 0: everything in this process); ray: the
             local Ray cluster's CPUs (default: every core).
+        progress: called as ``progress(kind, done, total, scenes)``: kind 0, a batch's simulated
+            frames (``scenes`` in the batch); 1, samples staged by the devices of a
+            several-device run; 2, pattern garment instances sewn (:func:`~datagen.generate.sewing.sew_patterns`).
         time_limit: local executor: minutes after which no new batch is started when the last
             batch's time per scene says it would not end in time; what was simulated stays staged
             and the same call resumes it (``complete`` is then False). For time-limited jobs.
@@ -169,15 +173,18 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
         writer.pack()  # nothing to pack; removes what an interrupted cleanup left in staging/
         return {"samples": plan.sample_count, "simulated": 0, "seconds": 0.0, "complete": True}
     t0 = time.perf_counter()
+    devices = parse_devices(device)
+    if any(plan.entry(g).is_pattern for g in range(len(plan.instances))):
+        plan.sew_device = sew_devices(devices)[0][0]  # where a garment missing from the garment cache is sewn
     if writer.missing_static():
-        sew_patterns(plan, default_workers() if workers is None else workers)
+        sew_patterns(plan, default_workers() if workers is None else workers, devices,
+                     progress=(lambda done, total: progress(2, done, total, 0)) if progress else None)
         for group, (arrays, names) in static_groups(plan, parse_devices(device)[0]).items():
             writer.stage_static(group, arrays, names=names,
                                 **({"diagnostics": plan.fit_diagnostics} if group == "fit" else {}))
     todo = writer.missing(range(plan.sample_count))
     log.info("%d of %d samples to simulate", len(todo), plan.sample_count)
     stats = {}
-    devices = parse_devices(device)
     if executor == "local" and len(devices) > 1 and todo:
         stats = run_on_devices(config, out, todo, devices, workers=workers, progress=progress,
                                seconds_left=None if deadline is None else deadline - time.perf_counter())

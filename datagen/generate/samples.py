@@ -65,6 +65,19 @@ class Outcome:
                    recorded_from=result.recorded_from, failure_code=failure_code(result.failure),
                    failure_frame=result.failure_frame, label=int(label), seconds=seconds)
 
+    @classmethod
+    def not_simulated(cls, failure, label: int) -> Outcome:
+        """A scene failed before it was simulated (its garment could not be sewn, ``failure``): no
+        simulated frame, so no frames, metrics of length 0 and failure frame -1."""
+        from schemas.dataset import ARRAYS
+
+        from datagen.sim.metrics import METRIC_NAMES
+
+        metrics = {k: np.zeros(0, ARRAYS[f"sim_frames/metric_{k}"].dtype) for k in METRIC_NAMES}
+        return cls(positions=np.zeros((0, 0, 3), np.float32), poses=np.zeros((0, 24, 3)), trans=np.zeros((0, 3)),
+                   metrics=metrics, recorded_from=0, failure_code=failure_code(failure), failure_frame=-1,
+                   label=int(label), seconds=0.0)
+
 
 def sample_arrays(plan: Plan, s: ScenePlan, o: Outcome) -> tuple[dict, dict]:
     """(arrays, scalars) of one sample, as ``StoreWriter.stage_sample`` takes them: the simulated
@@ -145,6 +158,9 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
         deadline: a ``time.perf_counter()`` time: no batch is started that the last batch's time
             per scene says would end after it (the first batch always runs); ``None``: no limit.
 
+    A scene whose garment could not be sewn (:meth:`~datagen.generate.plan.Plan.sew_failure`) is not
+    simulated: it is staged as failed with that reason (code ``seam``), no frames and no metrics.
+
     Returns:
         timings: ``simulate_seconds`` (inside the simulator), ``garment_frames`` (recorded, ok
         samples), ``wait_seconds`` (the simulating process waiting for workers), ``batches`` (run),
@@ -181,13 +197,22 @@ def simulate_samples(plan: Plan, indices: Sequence[int], device: str | None,
                 stats["wait_seconds"] += time.perf_counter() - t
             if pool is not None and k + 1 < len(batches):  # the next batch's garments while this one runs
                 garments_ready = _prefetch(pool, plan, batches[k + 1], workers)
+            unsewn = [s for s in batch if plan.sew_failure(s.garment) is not None]
+            for s in unsewn:  # its garment could not be sewn: failed with the reason, not simulated
+                o = Outcome.not_simulated(plan.sew_failure(s.garment), plan.motion(s.motion).label)
+                if pool is not None:
+                    pending.append(pool.submit(_finish, s, o))
+                else:
+                    on_sample(s.index, *sample_arrays(plan, s, o))
+            batch = [s for s in batch if plan.sew_failure(s.garment) is None]
             scenes = [Scene(garment=plan.garment(s.garment), body=plan.body_model, betas=plan.betas[s.body],
                             motion=plan.motion(s.motion)) for s in batch]
             t0 = time.perf_counter()
             results = simulate(scenes, plan.run_config, device=device,
-                               progress=(lambda d, n, b=len(batch): progress(0, d, n, b)) if progress else None)
+                               progress=(lambda d, n, b=len(batch): progress(0, d, n, b)) if progress else None
+                               ) if scenes else []
             seconds = time.perf_counter() - t0
-            stats["simulate_seconds"] += seconds
+            stats["simulate_seconds"] += seconds if scenes else 0.0
             for s, scene, r in zip(batch, scenes, results, strict=True):
                 o = Outcome.of(r, scene.motion.label, seconds / len(batch))
                 stats["garment_frames"] += len(r.positions) if o.failure_code == 0 else 0

@@ -1,7 +1,7 @@
 """Pattern garments in ``drape generate`` configs: the entries (``pattern:PROGRAM:SEED``,
 ``spec:PATH``), their identity for split disjointness, the pattern presets, and (slow) a micro
 store that mixes a pattern garment with a shell: its pattern fields, its settled templates and its
-USD export."""
+USD export; and a store with a design that cannot be sewn: its scenes are failed, the others made."""
 
 from __future__ import annotations
 
@@ -123,11 +123,16 @@ def test_pattern_presets_read_and_the_default_is_one_switch():
 
 
 @pytest.mark.slow
-def test_a_micro_store_keeps_the_pattern_and_the_settled_templates(tmp_path, capsys):
+@pytest.mark.parametrize("static_speed", [None, 5.0], ids=["sewn-not-static", "sewn-static"])
+def test_a_micro_store_keeps_the_pattern_and_the_settled_templates(tmp_path, capsys, fresh_garment_cache,
+                                                                   static_speed):
     """A pattern skirt beside a shell T-shirt: the store validates; the pattern garment keeps its
     per-corner rest coordinates (equal to the builder's), panels, stitches and design record, the
-    shell -1, NaN and none; both templates are their settle at rest, not their construction; a
-    scene of the pattern garment exports to USD with st and panel primvars that usd-core accepts."""
+    shell -1, NaN and none; the shell's template is its settle at rest, not its construction, and so
+    is the skirt's when its sewing's settle did not get static (the default criterion, 2 cm/s: 90
+    frames were not enough here); with a criterion it meets (5 m/s) the sewn skirt is its own template,
+    not settled again; a scene of the pattern garment exports to USD with st and panel primvars that
+    usd-core accepts."""
     from datagen.cli import main
     from datagen.generate.plan import Plan
     from datagen.generate.run import generate
@@ -137,7 +142,9 @@ def test_a_micro_store_keeps_the_pattern_and_the_settled_templates(tmp_path, cap
     # solve (3 substeps x 3 sweeps, 7 cm edges) is no test of the drape: gates that let it through
     lenient = {"stretch": 10.0, "penetration_depth": 1.0, "penetration_share": 1.0, "self_intersections": 100000,
                "slip": 10.0}
-    cfg = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "thresholds": lenient}})
+    sewing = {} if static_speed is None else {"static_speed": static_speed}
+    cfg = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "thresholds": lenient,
+                                                              "sewing": sewing}})
     out = tmp_path / "micro.zarr"
     generate(cfg, out, workers=0)
     assert validate(out) == []
@@ -148,7 +155,13 @@ def test_a_micro_store_keeps_the_pattern_and_the_settled_templates(tmp_path, cap
         m = s.garment(g)
         built = plan.garment(g)
         np.testing.assert_allclose(m["built_vertices"], built.vertices, atol=1e-6)
-        assert m["settled"] == 1 and np.abs(m["rest_vertices"] - m["built_vertices"]).max() > 1e-3
+        assert m["settled"] == 1
+        if m["design"] is not None:
+            assert plan.sewing(g).static == (static_speed is not None)
+        if plan.sewing(g) is not None and plan.sewing(g).static:  # sewn and static: its own template
+            assert np.array_equal(m["rest_vertices"], m["built_vertices"])
+        else:  # a shell, or a sewn garment not static: settled at rest from its construction for its template
+            assert np.abs(m["rest_vertices"] - m["built_vertices"]).max() > 1e-3
         if types[m["type"]] == "pattern:skirt_straight":
             assert m["seed"] == 1 and m["design"]["program"] == "skirt_straight" and m["design"]["seed"] == 1
             assert m["design"]["pattern"]["pattern"]["panels"] and m["design"]["parameters"]
@@ -201,3 +214,90 @@ def test_settled_is_the_rest_settle_in_the_garments_own_frame():
     templates, settled, figures = settle_templates(plan, [garment], None)
     assert settled.tolist() == [1] and not figures["failed"]
     assert np.array_equal(templates[0], results[1].settled.astype(np.float64))
+
+
+@pytest.fixture
+def fresh_garment_cache(tmp_path, monkeypatch) -> Path:
+    """An empty garment cache for this test (and the processes it starts), with drape's cached body:
+    what a test sews is sewn, not read from an earlier run's cache."""
+    from datagen.body.cache import cache_root
+
+    body = cache_root() / "body"
+    root = tmp_path / "cache"
+    root.mkdir()
+    if body.is_dir():
+        (root / "body").symlink_to(body)
+    monkeypatch.setenv("DRAPE_CACHE_DIR", str(root))
+    return root
+
+
+@pytest.mark.slow
+def test_a_design_that_cannot_be_sewn_fails_its_scenes_and_the_run_goes_on(tmp_path, capsys, fresh_garment_cache):
+    """A pattern skirt given one frame to close its seams cannot be sewn (no fake: the sewing runs and
+    its seams are still centimetres apart): the run does not stop; the skirt's scenes are staged as
+    failed with code ``seam`` and are never simulated (no frames, no metrics, failure frame -1), its
+    instance is not settled (its template is what sewing left); the T-shirt beside it is simulated and
+    settled as ever; the store validates and ``drape info`` lists the ``seam`` failures. The failure is
+    kept in the garment cache with the garment: asked again, the design is not sewn again."""
+    from schemas.dataset import FAILURE_NAMES
+
+    from datagen.cli import main
+    from datagen.generate.garments import placed_garment, record_path, sewn_cache_path
+    from datagen.generate.plan import Plan
+    from datagen.generate.run import generate
+    from datagen.store import open_store, validate
+
+    lenient = {"stretch": 10.0, "penetration_depth": 1.0, "penetration_share": 1.0, "self_intersections": 100000,
+               "slip": 10.0}
+    cfg = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "thresholds": lenient,
+                                                              "sewing": {"sew_frames": 1}},
+                                      "train": {**MICRO["train"], "motions": ["walk:0", "wave:0"]}})
+    out = tmp_path / "unsewn.zarr"
+    summary = generate(cfg, out, workers=0)
+    assert summary["complete"] and summary["samples"] == 4
+    assert validate(out) == []
+    s = open_store(out)
+    types = s.names["garment_type_names"]
+    skirt = next(g for g in range(s.garment_count) if types[s.garment(g)["type"]] == "pattern:skirt_straight")
+    assert s.garment(skirt)["settled"] == 0 and s.garment(1 - skirt)["settled"] == 1
+    seam = FAILURE_NAMES.index("seam")
+    for i in range(len(s)):
+        sc = s.scalars(i)
+        if sc["garment"] == skirt:
+            assert (sc["failure"], sc["failure_frame"], sc["recorded_from"]) == (seam, -1, 0)
+        else:
+            assert sc["failure"] != seam  # simulated (the lenient gates let the toy solve through)
+    plan = Plan(cfg)
+    failure = plan.sew_failure(skirt)
+    assert failure.code == "seam" and "open after 1 frames of sewing" in failure.message
+    entry = plan.entry(skirt)
+    placed = placed_garment(entry, plan.body_model, plan.betas[0], cfg.garment_edge_length, to_sew=True)
+    record = record_path(sewn_cache_path(entry, placed, plan.body_model, plan.betas[0], cfg.simulation))
+    assert record.is_file() and plan.sewing(skirt).sew_frames == -1 and plan.sewing(skirt).device == "cpu"
+    assert main(["info", str(out)]) == 0
+    printed = capsys.readouterr().out
+    assert "seam" in printed and "0 settled: not settled" in printed
+
+
+
+@pytest.mark.slow
+def test_sewing_processes_hand_every_result_to_the_run_through_the_garment_cache(fresh_garment_cache):
+    """On the CPU, ``sew_patterns`` sews in worker processes (spawned) and reports each instance as it
+    is done; the run's own plan then reads every garment and every failure from the garment cache,
+    without sewing (two skirts given one frame to close their seams: both fail, with the reason)."""
+    from datagen.generate.plan import Plan
+    from datagen.generate.sewing import sew_patterns
+
+    cfg = load_config(DatasetConfig, {**MICRO, "simulation": {**MICRO["simulation"], "sewing": {"sew_frames": 1}},
+                                      "train": {**MICRO["train"], "garments": ["pattern:skirt_straight:1",
+                                                                              "pattern:skirt_straight:2"]}})
+    seen = []
+    plan = Plan(cfg)
+    sew_patterns(plan, 2, ["cpu"], progress=lambda done, total: seen.append((done, total)))
+    assert seen == [(0, 2), (1, 2), (2, 2)]
+    assert not plan.has_garment(0) and not plan.has_garment(1)  # sewn in the workers, not here
+    assert len(list((fresh_garment_cache / "garments").glob("sewn-*.sewing.json"))) == 2
+    for g in range(2):
+        failure = plan.sew_failure(g)  # read from the garment cache
+        assert failure.code == "seam" and "open after 1 frames of sewing" in failure.message
+        assert plan.garment(g).vertex_count > 0
