@@ -199,7 +199,9 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
     if missing:
         raise InputError(f"{len(missing)} samples were not staged (first {missing[:5]}); run the command again to "
                          "resume")
-    writer.pack()
+    from datagen.store.card import provenance
+
+    writer.pack(provenance=provenance(device=device, executor=executor))
     seconds = time.perf_counter() - t0
     summary = {"samples": plan.sample_count, "simulated": len(todo), "seconds": seconds, "complete": True}
     if executor == "ray" and todo:
