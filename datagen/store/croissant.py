@@ -71,6 +71,7 @@ def croissant(facts: dict[str, Any], table: pa.Table, licences: tuple[tuple[str,
         "conformsTo": "http://mlcommons.org/croissant/1.0",
         "citeAs": f"drape {facts['drape_version']}, dataset {name} (seed {facts['seed']})",
         "license": LICENSE_URL, "url": "https://pypi.org/project/drape/", "version": "1.0.0",
+        **({"datePublished": facts["provenance"]["packed_at"][:10]} if facts["provenance"].get("packed_at") else {}),
         "distribution": [
             {"@type": "cr:FileObject", "@id": "zarr-root", "name": "zarr.json",
              "description": "the zarr v3 store's root metadata: root attributes (config, code names, provenance) and "
