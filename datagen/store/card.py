@@ -294,7 +294,7 @@ def render_card(facts: dict[str, Any], picture_files: list[str]) -> str:
     prov = facts["provenance"]
     out += [f"# {header['pretty_name']}", "",
             "Garments draped by a cloth simulator on moving bodies, made by "
-            "[drape](https://pypi.org/project/drape/) (`drape generate`): each *sample* is one scene, one garment "
+            "drape (`drape generate`): each *sample* is one scene, one garment "
             "instance on one body doing one motion, with its garment's simulated vertex positions per recorded frame "
             "(`detail`, and their smoothing `coarse`), the body's pose, and the simulator's per-frame metrics. A scene "
             "that failed one of the simulator's gates is kept as a sample without frames and with its reason. This "
@@ -424,8 +424,8 @@ def _schema_section(facts: dict) -> list[str]:
 
 def _load_section(facts: dict) -> list[str]:
     name, i = facts["name"], facts["example_sample"]
-    out = [f"From the directory that holds `{name}`, with drape installed (`pip install drape`, the reader and "
-           "trainers) or only zarr, tensorstore or pandas:", ""]
+    out = [f"From the directory that holds `{name}`, with drape installed (`pip install -e .` in drape's "
+           "repository: the reader and the trainers) or with only zarr, tensorstore or pandas:", ""]
     if i is not None:
         out += ["drape's reader (derived arrays are computed on read):", "", "```python",
                 "from datagen.store import open_store", "",

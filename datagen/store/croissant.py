@@ -70,7 +70,7 @@ def croissant(facts: dict[str, Any], table: pa.Table, licences: tuple[tuple[str,
                         + "; ".join(f"{part}: {text}" for part, text in licences)),
         "conformsTo": "http://mlcommons.org/croissant/1.0",
         "citeAs": f"drape {facts['drape_version']}, dataset {name} (seed {facts['seed']})",
-        "license": LICENSE_URL, "url": "https://pypi.org/project/drape/", "version": "1.0.0",
+        "license": LICENSE_URL, "version": "1.0.0",
         **({"datePublished": facts["provenance"]["packed_at"][:10]} if facts["provenance"].get("packed_at") else {}),
         "distribution": [
             {"@type": "cr:FileObject", "@id": "zarr-root", "name": "zarr.json",
