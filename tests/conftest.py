@@ -64,6 +64,8 @@ MICRO_TRAIN = {
 
 @pytest.fixture(scope="session")
 def train_store(tmp_path_factory):
+    """:data:`MICRO_TRAIN` generated (about a minute on 2 cores): the training tests' store and the dataset
+    card's (tests/store/test_card.py copies it before writing into it)."""
     from datagen.config import load_config
     from datagen.generate.config import DatasetConfig
     from datagen.generate.run import generate
