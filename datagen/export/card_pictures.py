@@ -85,12 +85,14 @@ def draw_card_pictures(path: str | Path) -> list[Path]:
     pictures are drawn). Returns the files."""
     from datagen.export.plots import plot_store_info
     from datagen.store.card import PICTURES_DIR
+    from datagen.store.layout import unique_temporary
     from datagen.store.reader import open_store
 
     require("matplotlib", "drawing a dataset card's pictures", extra="render")
     path = Path(path)
     store = open_store(path, backend="zarr")
-    tmp = Path(tempfile.mkdtemp(prefix=".tmp-card-", dir=path))
+    tmp = unique_temporary(path, PICTURES_DIR)  # beside card/, permissions by the umask
+    tmp.mkdir()
     try:
         preview_sheet(store, tmp / "preview.png")
         plot_store_info(path, tmp / "plots")

@@ -465,7 +465,7 @@ def _load_section(facts: dict) -> list[str]:
                 f'detail = steps * {POSITION_QUANTUM:g} + arr("frames/joints")[f, 0].read().result()',
                 "print(detail.shape)", "```", ""]
     out += ["The per-sample table (pandas):", "", "```python", "import pandas as pd", "",
-            f'table = pd.read_parquet("{name}/table")',
+            f'table = pd.read_parquet("{name}/table").sort_values("sample")   # one file per split',
             'print(table[["sample", "split", "garment_family", "material", "motion_label", "passed", "failure"]])',
             "```", ""]
     return out
