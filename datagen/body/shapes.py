@@ -17,11 +17,9 @@ import numpy as np
 
 from datagen.body.model import BodyModel
 from datagen.errors import InputError
+from datagen.geometry.mass import BODY_DENSITY, measure  # noqa: F401 (here since drape's first body; the store's card measures too)
 
 logger = logging.getLogger(__name__)
-
-BODY_DENSITY = 985.0
-"""Mean density of the human body [kg/m^3], to turn mesh volume into mass."""
 
 PRESET_TARGETS: dict[str, dict[str, float]] = {
     "thin": {"height_m": 1.70, "bmi": 18.5},
@@ -84,15 +82,4 @@ def resolve_betas(model: BodyModel, body: str | None = None, betas=None, seed: i
         return sample_betas(seed, 1, model.shape_dim)
     return np.zeros((1, model.shape_dim))
 
-
-def measure(vertices: np.ndarray, faces: np.ndarray) -> dict[str, float]:
-    """Height [m] (vertical extent, Y up), volume [m^3], mass [kg] and BMI of a closed body mesh
-    [V, 3] in a pose with straight legs (the rest pose)."""
-    import trimesh
-
-    mesh = trimesh.Trimesh(vertices, faces, process=False)
-    height = float(vertices[:, 1].max() - vertices[:, 1].min())
-    volume = float(abs(mesh.volume))
-    mass = volume * BODY_DENSITY
-    return {"height_m": height, "volume_m3": volume, "mass_kg": mass, "bmi": mass / height**2}
 

@@ -34,6 +34,7 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     from datagen.cli import body as body_cli
+    from datagen.cli import card as card_cli
     from datagen.cli import export as export_cli
     from datagen.cli import garment as garment_cli
     from datagen.cli import generate as generate_cli
@@ -47,11 +48,12 @@ def build_parser() -> argparse.ArgumentParser:
     sim_cli.register(sub, _Formatter)
     generate_cli.register(sub, _Formatter)
     export_cli.register(sub, _Formatter)
+    card_cli.register(sub, _Formatter)
     train_cli.register(sub, _Formatter)
     return parser
 
 
-_WARP_COMMANDS = frozenset({"garment", "simulate", "generate", "export", "preview", "predict"})
+_WARP_COMMANDS = frozenset({"garment", "simulate", "generate", "export", "preview", "predict", "card"})
 """Commands that run warp kernels (initialised quietly up front)."""
 
 _RESUME_HINTS = {

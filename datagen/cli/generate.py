@@ -48,7 +48,8 @@ def register(sub, formatter) -> None:
     p = sub.add_parser("validate", formatter_class=formatter, help="check a store against schemas/dataset.py",
                        description="Check that a store is complete and intact (every shard file present and unchanged "
                        "since pack, by the checksums pack recorded), then shapes, dtypes, units, offsets, finite "
-                       "values, disjoint splits and the fit model; exit 1 and list every problem if any.")
+                       "values, disjoint splits and the fit model, and that the dataset card beside it (README.md, "
+                       "table/, croissant.json) says what the store holds; exit 1 and list every problem if any.")
     p.add_argument("store")
     p.add_argument("--quick", action="store_true",
                    help="structure only: metadata, every shard file present, offsets; no checksums, no values")
@@ -57,7 +58,7 @@ def register(sub, formatter) -> None:
                        description="Print a store's splits, sample and frame counts, sizes on disk and failures; "
                        "with --plots also write PNG plots: samples per split, garment vertex counts, failure "
                        "reasons, and the distributions of the fit attribute α (per component) and of β.",
-                       epilog="examples:\n  drape info tiny.zarr\n  drape info tiny.zarr --json\n"
+                       epilog="examples:\n  drape info tiny.zarr\n  drape info tiny.zarr --json\n  drape info tiny.zarr --samples\n"
                        "  drape info tiny.zarr --plots plots/   (splits, vertex_counts, failures, alpha, betas .png)")
     p.add_argument("store")
     p.add_argument("--json", action="store_true")
@@ -65,6 +66,9 @@ def register(sub, formatter) -> None:
                    help="print only the config the store was made with (JSON, which is YAML: save it as .yaml and "
                         "give it to drape generate to make the store again)")
     p.add_argument("--plots", default=None, metavar="DIR", help="also write PNG plots into this directory")
+    p.add_argument("--samples", action="store_true",
+                   help="print only the per-sample table (one line per sample: garment, material, body, motion, "
+                        "frames, gates, strain, penetration; all columns in STORE/table/*.parquet)")
     p.set_defaults(func=_cmd_info)
 
 
@@ -170,7 +174,22 @@ def _cmd_generate(args) -> int:
         print("validate found problems:\n  " + "\n  ".join(problems), file=sys.stderr)
         return 1
     print(f"drape validate {args.out}: ok")
+    _card_pictures(Path(args.out))
     return 0
+
+
+def _card_pictures(store: Path) -> None:
+    """Draw the pictures beside the card pack wrote and list them in it (needs the render extra)."""
+    import importlib.util
+
+    if importlib.util.find_spec("matplotlib") is None:
+        print(f"dataset card: {store / 'README.md'} (no pictures: install drape[render] and run `drape card {store}`)")
+        return
+    from datagen.cli.card import write_card_with_pictures
+
+    written = write_card_with_pictures(store, check_files=False)
+    print(f"dataset card: {store / 'README.md'}, with {sum(p.suffix == '.png' for p in written)} pictures in "
+          f"{store / 'card'}")
 
 
 def _cmd_validate(args) -> int:
@@ -180,6 +199,10 @@ def _cmd_validate(args) -> int:
     if not path.exists():
         raise InputError(f"{path} does not exist; give a store directory made by drape generate")
     problems = validate(path, quick=args.quick)
+    if not problems and not args.quick:  # a valid store: does its dataset card still say what it holds?
+        from datagen.store.card import card_problems
+
+        problems = card_problems(path)
     if problems and "is not a drape store" in problems[0]:  # not a store at all: a wrong argument, not damage
         raise InputError(problems[0].replace("is not a drape store", "is not a drape dataset store"))
     if problems:
@@ -201,6 +224,12 @@ def _cmd_info(args) -> int:
         if not attrs or "config" not in attrs:
             raise InputError(f"{args.store} is not a drape dataset store (no config in its zarr.json)")
         print(json.dumps(attrs["config"], indent=2))
+        return 0
+    if args.samples:
+        from datagen.store.card import open_checked
+        from datagen.store.samples_table import format_table, sample_table
+
+        print(format_table(sample_table(open_checked(args.store, check_files=False))))
         return 0
     info = store_info(args.store)
     print(json.dumps(info, indent=2, default=str) if args.json else format_store_info(info))

@@ -206,7 +206,10 @@ def _generate(plan, out, executor, device, workers, progress, cluster, deadline=
     if missing:
         raise InputError(f"{len(missing)} samples were not staged (first {missing[:5]}); run the command again to "
                          "resume")
-    writer.pack()
+    from datagen.sim.device import warp_device
+    from datagen.store.card import provenance
+
+    writer.pack(provenance=provenance(device=device if device is not None else warp_device(None), executor=executor))
     seconds = time.perf_counter() - t0
     summary = {"samples": plan.sample_count, "simulated": len(todo), "seconds": seconds, "complete": True}
     if executor == "ray" and todo:

@@ -177,10 +177,12 @@ class _RowSink:
 class Packer:
     """Writes the packed store from the staging area by a :class:`PackPlan`, then marks it complete."""
 
-    def __init__(self, writer: StoreWriter, plan: PackPlan, chunking: dict[str, Chunking]):
+    def __init__(self, writer: StoreWriter, plan: PackPlan, chunking: dict[str, Chunking],
+                 provenance: dict[str, str] | None = None):
         self.w = writer
         self.plan = plan
         self.chunking = chunking
+        self.provenance = dict(provenance or {})
 
     def run(self) -> None:
         import zarr
@@ -208,7 +210,8 @@ class Packer:
         attrs = {"format": STORE_FORMAT, **self.w._identity, "drape_version": __version__, "complete": False,
                  "units": {s.path: s.unit for s in ARRAYS.values()}, **p.names,
                  "fit_attribute": bool(fit["dims"]["D"] > 0), "fit_diagnostics": fit.get("diagnostics", {}),
-                 "checksums": checksums}
+                 "checksums": checksums,
+                 "provenance": {**self.provenance, "packed_at": _utc_now()}}  # how it was made (the card says)
         root.attrs.put(attrs)
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # "consolidated metadata is not part of the v3 spec": we know
@@ -278,6 +281,12 @@ class Packer:
         for block in blocks:
             sink.add(np.asarray(block))
         sink.close()
+
+
+def _utc_now() -> str:
+    import datetime
+
+    return datetime.datetime.now(datetime.timezone.utc).strftime("%Y-%m-%d %H:%M:%S UTC")
 
 
 def _fsync_tree(path: Path, skip: Path) -> None:

@@ -354,7 +354,8 @@ class StoreWriter:
 
     # -- packing
 
-    def pack(self, *, chunking: Mapping[str, Chunking] | None = None) -> bool:
+    def pack(self, *, chunking: Mapping[str, Chunking] | None = None, provenance: Mapping[str, str] | None = None,
+             card: bool = True) -> bool:
         """Build the packed store from the staging area, mark it complete, remove the staging area.
 
         Run it in one process once every sample and static group is staged. If it is interrupted,
@@ -363,6 +364,11 @@ class StoreWriter:
 
         Args:
             chunking: per-table chunk/shard sizes overriding ``schemas.dataset.TABLES`` (tests, benchmarks).
+            provenance: how the store was made beyond its config (:func:`datagen.store.card.provenance`:
+                device, executor, drape's commit), kept with the time of packing as the root attribute
+                ``provenance``.
+            card: write the dataset card, the per-sample table and ``croissant.json`` once the store is
+                complete (:func:`datagen.store.card.write_card`; no pictures: ``drape card`` draws them).
 
         Returns:
             True if packed now, False if the store was already complete.
@@ -383,8 +389,14 @@ class StoreWriter:
             plan = PackPlan.build(self)
             after = "The staging area is intact and the store is not marked complete."
             with storage_errors(self.path, "pack the store", after):
-                Packer(self, plan, dict(chunking or {})).run()
+                Packer(self, plan, dict(chunking or {}), dict(provenance or {})).run()
             self._remove_staging()
+            if card:
+                from datagen.store.card import write_card
+
+                with storage_errors(self.path, "write the dataset card", "The store is complete; `drape card "
+                                    f"{self.path}` writes the card again."):
+                    write_card(self.path, check_files=False)
             logger.info("packed store %s: %d samples (%d failed), %d frames, %d segments", self.path,
                         self.sample_count, int(np.count_nonzero(plan.failure)), int(plan.frame_start[-1]),
                         len(plan.segments))
