@@ -74,7 +74,8 @@ def main(argv=None) -> int:
                   f"{r.settle_frames if r.settle_frames >= 0 else args.settle_frames} frames")]
         for col, (x, f, reg, title) in enumerate(shots):
             ax = axes[row, col]
-            layers = [MeshLayer(bv, bf, BODY_COLOUR), MeshLayer(x, f, colours[reg], two_sided=True, depth_bias=GARMENT_DEPTH_BIAS)]
+            layers = [MeshLayer(bv, bf, BODY_COLOUR),
+                      MeshLayer(x, f, colours[reg], two_sided=True, depth_bias=GARMENT_DEPTH_BIAS)]
             draw_meshes(ax, layers, 0.0, ambient=0.3, absolute=True, linewidth=0.2,
                         limits=view_limits([bv, g.vertices], 0.0, pad=1.03))
             ax.set_aspect("equal")
