@@ -15,7 +15,8 @@ tube round the limb behind it (:func:`_limb`): its axis runs along the panel's y
 middle of the body behind the panel's lower half and central half (the leg), its radius is the
 largest of the panel's half width over 90 degrees and the limb's own radius there plus the
 clearance, so a front and a back panel meet at the limb's sides and their crotch extensions curl
-between the legs. Laid flat in front of both legs (trousers seed 0, regular body) the left
+between the legs; a tube that would cross the body's midplane (a back panel, wider by its crotch
+extension) has its axis moved out until it keeps half of ``SEPARATION`` from it. Laid flat in front of both legs (trousers seed 0, regular body) the left
 front panel's crotch extension lies on the right one: 75 crossings once sewn; wrapped round each
 leg, 4.
 
@@ -62,6 +63,7 @@ def _limb(mesh: FlatPatternMesh, body_vertices: np.ndarray, out: np.ndarray, cle
     (module docstring); the others as given."""
     out = out.copy()
     flat = _flat(mesh)
+    mid = body_vertices.mean(axis=0)
     for pi, panel in enumerate(mesh.pattern.panels):
         if not panel.limb:
             continue
@@ -84,6 +86,12 @@ def _limb(mesh: FlatPatternMesh, body_vertices: np.ndarray, out: np.ndarray, cle
         rel = pts - axis
         x, y = rel @ ex, rel @ ey
         radius = max(float(np.abs(x).max()) / _MAX_TURN, limb_radius + clearance)
+        # the tube keeps to its side of the body's midplane (the other leg's tube is its mirror)
+        side = float((axis - mid) @ ex)
+        short = radius + SEPARATION / 2 - abs(side)
+        if short > 0:
+            axis = axis + np.sign(side) * short * ex
+            x = (pts - axis) @ ex
         theta = x / radius
         out[sel] = axis + y[:, None] * ey + radius * (np.cos(theta)[:, None] * n + np.sin(theta)[:, None] * ex)
     return out
