@@ -224,7 +224,9 @@ class Panel:
     ``vertices`` [m] in panel space; ``edges[i].end == edges[i+1].start`` and the last edge ends
     where the first starts; ``translation`` [m] and ``rotation`` (XYZ Euler, degrees) place it in
     the body's rest frame; ``grain`` is the warp direction in panel space (unit); ``edge_groups``
-    names runs of edges (``"hem": (2,)``) for openings and for the programs."""
+    names runs of edges (``"hem": (2,)``) for openings and for the programs; ``limb``: the panel
+    covers one limb (a trouser leg's front or back), so the placement bends it into a half tube
+    round that limb (:mod:`datagen.garment.pattern.placement`) instead of laying it round the body."""
 
     name: str
     vertices: tuple[tuple[float, float], ...]
@@ -233,8 +235,12 @@ class Panel:
     rotation: tuple[float, float, float] = (0.0, 0.0, 0.0)
     grain: tuple[float, float] = (0.0, 1.0)
     edge_groups: Mapping[str, tuple[int, ...]] = field(default_factory=dict)
+    limb: bool = False
 
     def __post_init__(self):
+        if not isinstance(self.limb, (bool, np.bool_)):
+            raise InputError(f"panel '{self.name}': limb must be True or False, got {self.limb!r}")
+        object.__setattr__(self, "limb", bool(self.limb))
         if not isinstance(self.name, str) or not self.name:
             raise InputError(f"a panel needs a non-empty name, got {self.name!r}")
         who = f"panel '{self.name}'"

@@ -10,6 +10,16 @@ Two modes (:func:`place`):
   side), so a front and a back panel meet at the sides; then pushed out of the body. Bending
   is isometric, so the rest state (the flat panel) is unstrained; the stitched pairs start closer.
 
+In both modes a panel marked ``limb`` (a trouser leg's front or back) is bent instead into a half
+tube round the limb behind it (:func:`_limb`): its axis runs along the panel's y direction through the
+middle of the body behind the panel's lower half and central half (the leg), its radius is the
+largest of the panel's half width over 90 degrees and the limb's own radius there plus the
+clearance, so a front and a back panel meet at the limb's sides and their crotch extensions curl
+between the legs; a tube that would cross the body's midplane (a back panel, wider by its crotch
+extension) has its axis moved out until it keeps half of ``SEPARATION`` from it. Laid flat in front of both legs (trousers seed 0, regular body) the left
+front panel's crotch extension lies on the right one: 75 crossings once sewn; wrapped round each
+leg, 4.
+
 Pushing out: a vertex inside the body or closer than ``clearance`` to it moves to the closest body
 point plus ``clearance`` along the outward direction (warp mesh queries, as the garment checks).
 :func:`placement_report` gives the figures that compare the modes (stitch gap, vertices inside).
@@ -48,9 +58,50 @@ def _flat(mesh: FlatPatternMesh) -> np.ndarray:
     return out
 
 
+def _limb(mesh: FlatPatternMesh, body_vertices: np.ndarray, out: np.ndarray, clearance: float) -> np.ndarray:
+    """``out`` [V, 3] with every ``limb`` panel bent into a half tube round the limb behind it
+    (module docstring); the others as given."""
+    out = out.copy()
+    flat = _flat(mesh)
+    mid = body_vertices.mean(axis=0)
+    for pi, panel in enumerate(mesh.pattern.panels):
+        if not panel.limb:
+            continue
+        sel = mesh.panel_id == pi
+        r = panel.matrix()
+        ex, ey, n = r[:, 0], r[:, 1], r[:, 2]
+        origin = np.asarray(panel.translation)
+        pts = flat[sel]
+        px, py = (pts - origin) @ ex, (pts - origin) @ ey
+        rel = body_vertices - origin
+        bx, by, bn = rel @ ex, rel @ ey, rel @ n
+        x0, x1 = np.percentile(px, [25, 75])
+        y0 = py.min()
+        behind = (bx > x0) & (bx < x1) & (by > y0) & (by < y0 + 0.5 * (py.max() - y0)) & (bn < 0)
+        if behind.sum() < 10:
+            continue  # no limb behind it: left where the program put it
+        axis = body_vertices[behind].mean(axis=0)
+        limb = body_vertices[behind] - axis
+        limb_radius = float(np.percentile(np.hypot(limb @ ex, limb @ n), 90))
+        rel = pts - axis
+        x, y = rel @ ex, rel @ ey
+        radius = max(float(np.abs(x).max()) / _MAX_TURN, limb_radius + clearance)
+        # the tube keeps to its side of the body's midplane (the other leg's tube is its mirror)
+        side = float((axis - mid) @ ex)
+        short = radius + SEPARATION / 2 - abs(side)
+        if short > 0:
+            axis = axis + np.sign(side) * short * ex
+            x = (pts - axis) @ ex
+        theta = x / radius
+        out[sel] = axis + y[:, None] * ey + radius * (np.cos(theta)[:, None] * n + np.sin(theta)[:, None] * ex)
+    return out
+
+
 def _wrap(mesh: FlatPatternMesh, body_vertices: np.ndarray) -> np.ndarray:
     out = _flat(mesh)
     for pi, panel in enumerate(mesh.pattern.panels):
+        if panel.limb:
+            continue  # bent round its limb (_limb)
         sel = mesh.panel_id == pi
         r = panel.matrix()
         ex, ey, n = r[:, 0], r[:, 1], r[:, 2]
@@ -134,6 +185,7 @@ def place(mesh: FlatPatternMesh, body_vertices: np.ndarray, body_faces: np.ndarr
         pts = _wrap(mesh, bv)
     else:
         raise InputError(f"placement mode must be 'flat' or 'wrap', got {mode!r}")
+    pts = _limb(mesh, bv, pts, clearance)
     # two passes: a vertex pushed onto another part of the body (an arm) is pushed again
     for _ in range(2 if push else 0):
         pts = push_out(pts, bv, bf, clearance)

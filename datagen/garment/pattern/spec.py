@@ -184,7 +184,8 @@ def _read_panel(name: str, spec: Mapping, scale: float, absolute: bool) -> tuple
     translation = tuple(float(x) * scale for x in spec.get("translation", (0, 0, 0)))
     panel = Panel(name=name, vertices=[tuple(v) for v in verts * flip], edges=edges,
                   translation=translation, rotation=_mirror_rotation(rotation) if mirrored else rotation,
-                  grain=tuple(grain / max(np.linalg.norm(grain), 1e-12)), edge_groups=groups)
+                  grain=tuple(grain / max(np.linalg.norm(grain), 1e-12)), edge_groups=groups,
+                  limb=bool(spec.get("drape_limb", False)))
     return panel, mirrored, file_to_edge
 
 
@@ -354,6 +355,8 @@ def spec_dict(pattern: Pattern, units_in_meter: float = UNITS_IN_METER) -> dict:
             "translation": [x * s for x in p.translation], "rotation": list(p.rotation),
             "grain": list(p.grain), "edge_groups": {k: list(ids) for k, ids in p.edge_groups.items()},
         }
+        if p.limb:
+            panels[p.name]["drape_limb"] = True
     stitches = []
     for k, st in enumerate(pattern.stitches):
         ea, eb = st.a.edges, st.b.edges

@@ -169,7 +169,8 @@ def pair_stitches(pattern: Pattern) -> tuple[Pattern, dict[tuple[str, int], tupl
         new_index[p.name] = index
         groups = {g: tuple(j for i in ids for j in index[i]) for g, ids in p.edge_groups.items()}
         panels.append(Panel(name=p.name, vertices=[tuple(v) for v in verts], edges=edges,
-                            translation=p.translation, rotation=p.rotation, grain=p.grain, edge_groups=groups))
+                            translation=p.translation, rotation=p.rotation, grain=p.grain, edge_groups=groups,
+                            limb=p.limb))
     stitches = []
     for st in pattern.stitches:
         sides = [SeamSide(panel=s.panel, edges=tuple(j for i in s.edges for j in new_index[s.panel][i]))

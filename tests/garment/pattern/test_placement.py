@@ -79,3 +79,41 @@ def test_placed_panels_keep_apart_from_each_other(hoody_mesh, fat_body):
         pid = hoody_mesh.panel_id[free]
         close = pid[pairs[:, 0]] != pid[pairs[:, 1]] if len(pairs) else np.zeros(0, bool)
         assert not close.any(), f"{mode}: {int(close.sum())} vertex pairs of two panels closer than {SEPARATION} m"
+
+
+def test_trouser_legs_are_bent_round_their_own_leg(default_body):
+    """A trouser leg's front and back panels (``Panel.limb``) are bent into half tubes round their own
+    leg: bending keeps the flat rest lengths, the left leg's panels lie left of the right leg's at
+    the hem (laid flat in front of both legs, the front panels overlapped by their crotch extensions
+    and crossed each other when sewn), and a leg's inside-leg seam starts closer than flat."""
+    from datagen.body.measurements import measure_body
+    from datagen.body.shapes import resolve_betas
+    from datagen.garment.pattern.programs import make_pattern
+
+    betas = resolve_betas(default_body, body="regular")[0]
+    bv, bf = np.asarray(default_body.shaped(betas))[0], np.asarray(default_body.faces)
+    pat = make_pattern("trousers", 0, measure_body(default_body, betas))
+    assert [p.limb for p in pat.panels[:4]] == [True] * 4
+    mesh = mesh_pattern(pat, 0.03)
+    bent = place(mesh, bv, bf, mode="flat", push=False)
+    # each limb panel on its own cylinder: lengths kept (chords aside)
+    limb = np.isin(mesh.panel_id, [0, 1, 2, 3])
+    e = np.unique(np.sort(np.concatenate([mesh.faces[:, [0, 1]], mesh.faces[:, [1, 2]]]), axis=1), axis=0)
+    e = e[limb[e[:, 0]]]
+    rest = np.linalg.norm(mesh.rest_uv[e[:, 0]] - mesh.rest_uv[e[:, 1]], axis=1)
+    now = np.linalg.norm(bent[e[:, 0]] - bent[e[:, 1]], axis=1)
+    assert np.abs(now / rest - 1).max() < 0.01
+    pos = place(mesh, bv, bf, mode="flat")
+    names = [p.name for p in pat.panels]
+    hem = pos[:, 1] < np.percentile(pos[limb, 1], 20)
+    left = hem & np.isin(mesh.panel_id, [names.index("front_left"), names.index("back_left")])
+    right = hem & np.isin(mesh.panel_id, [names.index("front_right"), names.index("back_right")])
+    assert pos[left, 0].min() > pos[right, 0].max()
+    assert placement_report(mesh, pos, bv, bf).vertices_inside == 0
+    flat = place(dataclasses.replace(mesh, pattern=dataclasses.replace(pat, panels=tuple(
+        dataclasses.replace(p, limb=False) for p in pat.panels))), bv, bf, mode="flat")
+    fl = names.index("front_left")
+    inseam = mesh.edge_vertices[(fl, pat.panels[fl].edge_groups["inseam"][0])]
+    pairs = mesh.stitch_pairs[np.isin(mesh.stitch_pairs, inseam).any(1)]
+    gap = lambda x: np.linalg.norm(x[pairs[:, 0]] - x[pairs[:, 1]], axis=1).mean()  # noqa: E731
+    assert gap(pos) < 0.8 * gap(flat)

@@ -133,9 +133,10 @@ class Piece:
 
 
 def piece(name: str, segs: Iterable[Seg], *, translation=(0.0, 0.0, 0.0), rotation=(0.0, 0.0, 0.0),
-          grain=(0.0, 1.0)) -> Piece:
+          grain=(0.0, 1.0), limb: bool = False) -> Piece:
     """The closed panel of ``segs`` (the last segment ends at the first's start), with edge groups
-    from the segments' groups and an index of their names (names must be unique, or empty)."""
+    from the segments' groups and an index of their names (names must be unique, or empty); ``limb``:
+    the panel covers one limb (:class:`~datagen.garment.pattern.model.Panel`)."""
     segs = list(segs)
     verts = [s.start for s in segs]
     edges = tuple(Edge(start=i, end=(i + 1) % len(segs), curve=s.curve) for i, s in enumerate(segs))
@@ -149,7 +150,8 @@ def piece(name: str, segs: Iterable[Seg], *, translation=(0.0, 0.0, 0.0), rotati
                 raise ValueError(f"panel {name!r}: two edges named {s.name!r}")
             index[s.name] = i
     panel = Panel(name=name, vertices=tuple(verts), edges=edges, translation=tuple(translation),
-                  rotation=tuple(rotation), grain=tuple(grain), edge_groups={k: tuple(v) for k, v in groups.items()})
+                  rotation=tuple(rotation), grain=tuple(grain), edge_groups={k: tuple(v) for k, v in groups.items()},
+                  limb=limb)
     return Piece(panel, index)
 
 

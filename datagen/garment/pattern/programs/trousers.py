@@ -114,10 +114,12 @@ def build_trousers(design, m: BodyMeasurements, name: str) -> Pattern:
     tf = (0.0, f.floor_y, f.centre_z + dz)
     tb = (0.0, f.floor_y, f.centre_z - dz)
     back_rot = (0.0, 180.0, 0.0)
-    fl = piece("front_left", front, translation=tf)
-    fr = piece("front_right", mirror(front, front[0].start)[0], translation=tf)
-    bl = piece("back_left", mirror(back, back[0].start)[0], translation=tb, rotation=back_rot)
-    br = piece("back_right", back, translation=tb, rotation=back_rot)
+    # each leg's panels are bent round their own leg when placed (limb): laid flat in front of both
+    # legs, a front panel's crotch extension lies on the other leg's panel and is dragged through it
+    fl = piece("front_left", front, translation=tf, limb=True)
+    fr = piece("front_right", mirror(front, front[0].start)[0], translation=tf, limb=True)
+    bl = piece("back_left", mirror(back, back[0].start)[0], translation=tb, rotation=back_rot, limb=True)
+    br = piece("back_right", back, translation=tb, rotation=back_rot, limb=True)
     out = [n for n in ("out_lo", "out_mid", "out_hi") if n in fl.index]
     stitches = [
         seam(fl, ["cf_hi", "cf_lo"], fr, ["cf_lo", "cf_hi"]),
