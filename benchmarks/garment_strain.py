@@ -42,7 +42,9 @@ class GarmentStrain(Benchmark):
                 samples.append((i, types[int(g["type"])], failure, 0, None))
                 continue
             x = store.sample(i, names=["detail"])["detail"][::every]
-            s = principal_strain(g["rest_vertices"], g["faces"], x).ravel()
+            cut = g.get("rest_uv")  # a pattern garment's cut per corner (NaN for a shell): the simulator's rest
+            cut = cut if cut is not None and np.isfinite(cut).all() else None
+            s = principal_strain(g["rest_vertices"], g["faces"], x, rest_corners=cut).ravel()
             mat = materials[int(g["material"])]
             per_material[mat].append(s)
             samples.append((i, types[int(g["type"])], mat, len(x), s))

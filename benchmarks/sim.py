@@ -285,8 +285,11 @@ def run_scenes(args) -> None:
     print(f"{1000 * results[0].seconds / frames:.1f} ms per batch frame ({frames} frames, {len(scenes)} scenes)")
     for name, scene, r in zip(names, scenes, results):
         summary = r.summary()
-        # the largest principal strain of every triangle against the garment's rest mesh, recorded frames
-        strain = principal_strain(scene.garment.vertices, scene.garment.faces, r.positions)
+        # the largest principal strain of every triangle against the garment's rest shape (a pattern
+        # garment's cut, per corner), recorded frames
+        strain = principal_strain(scene.garment.vertices, scene.garment.faces, r.positions,
+                                  rest_corners=scene.garment.face_uv if getattr(scene.garment, "kind", "shell") == "pattern"
+                                  else None)
         summary.update({f"strain_{q}": float(np.percentile(strain, v)) for q, v in (("p50", 50), ("p90", 90),
                                                                                     ("p99", 99))},
                        strain_max=float(strain.max()), material=scene.garment.material.name)

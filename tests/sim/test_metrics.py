@@ -4,6 +4,7 @@ against their definitions."""
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from datagen.sim.metrics import principal_strain
 
@@ -78,3 +79,20 @@ def test_per_frame_stretch_energy_and_nan_match_their_host_definitions():
     assert np.isinf(got["kinetic_energy"][1]) and np.isfinite(got["kinetic_energy"][[0]]).all()
     assert np.isinf(got["stretch_max"][2]) and np.isfinite(got["stretch_max"][:2]).all()
     assert got["penetration_count"][0] >= 1 and abs(got["penetration_depth"][0] - 0.05) < 0.005
+
+
+def test_principal_strain_against_a_cut_reads_the_panel_not_a_3d_template():
+    """A pattern garment's strain is measured against its cut (per-corner 2D rest): a triangle cut as a
+    unit right triangle, placed turned in 3D and stretched 10 % along its first edge, reads 0.1 whatever
+    3D template is given, and the same as against a flat 3D copy of the cut."""
+    from datagen.sim.metrics import principal_strain
+
+    cut = np.array([[[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]])
+    faces = np.array([[0, 1, 2]])
+    turn = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    placed = np.array([[0.0, 0.0, 0.0], [1.1, 0.0, 0.0], [0.0, 1.0, 0.0]]) @ turn.T
+    squeezed_template = np.array([[0.0, 0.0, 0.0], [0.63, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    flat = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    assert principal_strain(squeezed_template, faces, placed, rest_corners=cut)[0] == pytest.approx(0.1, abs=1e-12)
+    assert principal_strain(flat, faces, placed)[0] == pytest.approx(0.1, abs=1e-12)
+    assert principal_strain(squeezed_template, faces, placed)[0] > 0.7  # the artefact: against the squeezed template
