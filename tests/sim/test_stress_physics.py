@@ -46,6 +46,33 @@ def test_substeps_follow_the_frame_time_and_the_edge_length():
     assert SolverVBD(model, SolverConfig(self_collision=False)).substeps_for(1.0 / 30) == 15
 
 
+def test_a_frame_time_or_edge_length_the_solver_cannot_hold_is_refused_with_what_to_do():
+    """A step that the substep rule would split into more than ``substep_cap`` (100) substeps is
+    refused before anything runs, with an InputError that names the frame rate (and, where a
+    finer mesh is the cause, the edge length) that would do: 2 frames/s at 1.5 cm edges (150
+    substeps), and a patch of 1 mm edges at 30 fps (150) through the solver's own step. ``substeps``
+    set that high by hand is taken as asked; a raised cap lets the rule through."""
+    from datagen.errors import InputError
+    from datagen.sim.model import ClothModelBuilder
+    from datagen.sim.state import BodyControl, ClothState
+    from benchmarks.physics_limits import strip_mesh
+
+    steps = StepConfig()
+    with pytest.raises(InputError, match=r"needs 150 substeps.*substep_cap = 100.*3 frames/s or more"):
+        steps.substeps_for(0.5, 0.015)
+    assert StepConfig(substep_cap=150).substeps_for(0.5, 0.015) == 150
+    assert StepConfig(substeps=150).substeps_for(1.0 / 30, 0.001) == 150
+    assert steps.substeps_for(1.0 / 5, 0.01) == 90  # 5 frames/s on the 1 cm strip: held
+    v, f, frames, top, _bottom = strip_mesh(dx=0.001, width=0.004, length=0.004)
+    b = ClothModelBuilder()
+    b.add_cloth(v, f, material_name="cotton", pinned=top, material_frames=frames)
+    model = b.finalize("cpu")
+    solver = SolverVBD(model, SolverConfig(self_collision=False))
+    s0, s1 = ClothState.from_model(model), ClothState.from_model(model)
+    with pytest.raises(InputError, match=r"1 mm edges needs 150 substeps.*45 frames/s or more.*edges of 1.5 mm or longer"):
+        solver.step(s0, s1, BodyControl.from_numpy(model, model.host.body_rest), 1.0 / 30)
+
+
 @pytest.mark.parametrize("name", list(MATERIALS))
 def test_a_strip_at_15_fps_hangs_at_its_static_elongation_without_making_energy(name):
     """The 5 cm x 50 cm strip of every preset, hanging for 2 s at 15 frames/s (no air drag,
