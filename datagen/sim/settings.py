@@ -83,6 +83,12 @@ class StepConfig:
         global_iterations: conjugate-gradient iterations of the global Newton step that starts every
             substep (:mod:`datagen.sim.newton_kernels`), 0-1000; 0: off, the sweeps alone (which
             carry a load one vertex per sweep: woven cloth needs it carried across the garment at once).
+        global_steps: Newton steps of the global step, 1-10, each ``global_iterations`` conjugate-gradient
+            iterations from the elements relinearised where the last one ended (its forces, each
+            element's deformation, its branch of the buckling law); the preconditioner is the first's.
+        warm_start: start the global step's conjugate gradients from the correction the last substep's
+            solve made to its initial guess (scaled per scene to the step along it that minimises the
+            quadratic model, within [0, 1]) instead of from zero (``newton_kernels.warm_start``).
         compression_hessian: the stiffness the global step's Hessian gives a direction in
             compression: ``buckled`` (the buckling branch's, r x the tension stiffness, the
             curvature at x) or ``tension`` (the tension branch's, which bounds the membrane's
@@ -105,6 +111,8 @@ class StepConfig:
     substep_cap: int = _limit(100, min=1, max=1000)
     iterations: int = _limit(20, min=1, max=200)
     global_iterations: int = _limit(20, min=0, max=1000)
+    global_steps: int = _limit(1, min=1, max=10)
+    warm_start: bool = True
     compression_hessian: str = field(default="buckled", metadata={"choices": ("buckled", "tension")})
     chebyshev_rho: float = _limit(0.7, min=0.0, below=1.0)
     chebyshev_contacts: bool = True
@@ -288,6 +296,7 @@ class LaunchConfig:
 FLAT_NAMES = {
     "substeps": "steps.substeps", "max_substep": "steps.max_substep", "substep_edge": "steps.substep_edge", "substep_cap": "steps.substep_cap",
     "iterations": "steps.iterations", "global_iterations": "steps.global_iterations",
+    "global_steps": "steps.global_steps", "warm_start": "steps.warm_start",
     "compression_hessian": "steps.compression_hessian",
     "chebyshev_rho": "steps.chebyshev_rho", "chebyshev_contacts": "steps.chebyshev_contacts",
     "chebyshev_body_contacts": "steps.chebyshev_body_contacts", "colour_hinge_wings": "steps.colour_hinge_wings",
