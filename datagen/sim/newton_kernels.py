@@ -79,7 +79,7 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), verts: Vertices, membrane:
                           diag_other: wp.array(dtype=wp.mat33)):
     """Every vertex's force (inertia, membrane with lock and damping, bending, body contact and
     friction) and the 3x3 block of the Hessian that the element products do not give (inertia,
-    body contact and friction). The membrane's StVK and damping forces and the hinges'
+    lock, body contact and friction). The membrane's StVK and damping forces and the hinges'
     forces are each element's shares at its corners (``face_force``, ``edge_force``: written by
     :func:`membrane_linearise` and :func:`bending_linearise` at the same x), gathered here in the
     vertex's fixed incidence order; each element is evaluated once, not once for each of its corners
@@ -120,7 +120,8 @@ def vertex_force_diagonal(x: wp.array(dtype=wp.vec3), verts: Vertices, membrane:
             f0 = (x1 - x0) * D[0, 0] + (x2 - x0) * D[1, 0]
             f1 = (x1 - x0) * D[0, 1] + (x2 - x0) * D[1, 1]
             fl, hl = lock_force_hessian(f0, f1, _corner_weights(D, local), lk[0], lk[1] * membrane.area[f])
-            force += fl  # its Hessian is the element products' (membrane_product, element_diagonal)
+            force += fl
+            hess += hl
     for k in range(bending.v2e_offsets[i], bending.v2e_offsets[i + 1]):
         force += edge_force[bending.v2e[k, 0], bending.v2e[k, 1]]
     r = body.radius[i]
@@ -174,47 +175,16 @@ def _membrane_law(f0: wp.vec3, f1: wp.vec3, law: vec5, majorise: int):
     return k, S
 
 
-@wp.func
-def _lock_direction(f0: wp.vec3, f1: wp.vec3, lam_lock: float, k: int):
-    """Principal direction ``k`` (0: the larger stretch) of F = [f0 f1] for the lock: its material
-    direction v_k, the unit u = F v_k / λ, and (λ - λ_lock)/λ; the last is <= 0 where λ is not
-    beyond ``lam_lock`` (the direction carries no lock), as in ``kernels.lock_force_hessian``."""
-    a = wp.dot(f0, f0)
-    b = wp.dot(f1, f1)
-    cc = wp.dot(f0, f1)
-    mean = 0.5 * (a + b)
-    rad = wp.sqrt(0.25 * (a - b) * (a - b) + cc * cc)
-    v = wp.vec2(1.0, 0.0)
-    if rad > 1.0e-12:
-        if a >= b:
-            v = wp.normalize(wp.vec2(mean + rad - b, cc))
-        else:
-            v = wp.normalize(wp.vec2(cc, mean + rad - a))
-    mu = mean + rad
-    if k == 1:
-        mu = mean - rad
-        v = wp.vec2(-v[1], v[0])
-    lam = wp.sqrt(wp.max(mu, 0.0))
-    u = wp.vec3(0.0)
-    beta = float(-1.0)
-    if lam > lam_lock:
-        u = (f0 * v[0] + f1 * v[1]) / lam
-        beta = (lam - lam_lock) / lam
-    return v, u, beta
-
-
 @wp.kernel
 def element_diagonal(dm_inv: wp.array(dtype=wp.mat22), frame: wp.array2d(dtype=wp.vec3), law: wp.array(dtype=wp.vec4),
                      stress: wp.array(dtype=wp.mat22), face_scale: wp.array(dtype=float),
-                     tri_area: wp.array(dtype=float), tri_lock: wp.array(dtype=wp.vec2),
                      edges: wp.array2d(dtype=wp.int32), grad: wp.array2d(dtype=wp.vec3),
                      hinge_scale: wp.array(dtype=float),
                      v2f_offsets: wp.array(dtype=wp.int32), v2f: wp.array2d(dtype=wp.int32),
                      v2e_offsets: wp.array(dtype=wp.int32), v2e: wp.array2d(dtype=wp.int32),
                      out_diag: wp.array(dtype=wp.mat33)):
     """Each vertex's 3x3 diagonal block of H_membrane + H_bending (orthotropic StVK Gauss-Newton
-    with the PSD-projected geometric part, and the hinges' k ∇θ∇θᵀ, both times 1 + k_d/h; the
-    lock's PSD Hessian, undamped), summed
+    with the PSD-projected geometric part, and the hinges' k ∇θ∇θᵀ, both times 1 + k_d/h), summed
     over its own faces and hinges in their fixed order, from the elements' linearisation
     (:func:`membrane_linearise`, :func:`bending_linearise`)."""
     i = wp.tid()
@@ -235,15 +205,6 @@ def element_diagonal(dm_inv: wp.array(dtype=wp.mat22), frame: wp.array2d(dtype=w
         geo = c[0] * (S[0, 0] * c[0] + S[0, 1] * c[1]) + c[1] * (S[1, 0] * c[0] + S[1, 1] * c[1])
         blk = blk + wp.identity(n=3, dtype=float) * geo
         blk_sum += blk * face_scale[f]
-        lk = tri_lock[f]
-        if lk[1] > 0.0:  # the lock's block (kernels.lock_force_hessian's, undamped)
-            kA = lk[1] * tri_area[f]
-            for d in range(2):
-                v, u, beta = _lock_direction(f0, f1, lk[0], d)
-                if beta > 0.0:
-                    vc = wp.dot(v, c)
-                    uu = wp.outer(u, u)
-                    blk_sum += (uu + (wp.identity(n=3, dtype=float) - uu) * beta) * (kA * vc * vc)
     for n in range(v2e_offsets[i], v2e_offsets[i + 1]):
         e = v2e[n, 0]
         if edges[e, 2] >= 0 and edges[e, 3] >= 0:
@@ -312,14 +273,10 @@ def membrane_linearise(x: wp.array(dtype=wp.vec3), x_prev: wp.array(dtype=wp.vec
 @wp.kernel
 def membrane_product(faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=wp.mat22),
                      frame: wp.array2d(dtype=wp.vec3), law: wp.array(dtype=wp.vec4), stress: wp.array(dtype=wp.mat22),
-                     scale: wp.array(dtype=float), tri_area: wp.array(dtype=float), tri_lock: wp.array(dtype=wp.vec2),
-                     p: wp.array(dtype=wp.vec3), out: wp.array2d(dtype=wp.vec3)):
+                     scale: wp.array(dtype=float), p: wp.array(dtype=wp.vec3), out: wp.array2d(dtype=wp.vec3)):
     """Each triangle's share of H_membrane p at its three corners, ``out[f, corner]`` (gathered per
     vertex by :func:`gather_product`, so no sum depends on thread order), from the triangle's
-    linearisation (:func:`membrane_linearise`); with the lock's full PSD Hessian (all corner pairs:
-    kA (c_j·v)(c_k·v) [u uᵀ + (λ - λ_lock)/λ (I - u uᵀ)] over the principal directions beyond the
-    lock). Before, the lock was only in each vertex's own block, a spring that held every vertex
-    where it was: the global step could not move a stretch beyond the lock along the cloth."""
+    linearisation (:func:`membrane_linearise`)."""
     f = wp.tid()
     i0 = faces[f, 0]
     i1 = faces[f, 1]
@@ -347,29 +304,9 @@ def membrane_product(faces: wp.array2d(dtype=wp.int32), dm_inv: wp.array(dtype=w
     # geometric part: Σ_k (c_jᵀ S c_k) p_k = (dF S) c_j with dF = [df0 df1]
     g0 = df0 * S[0, 0] + df1 * S[1, 0]
     g1 = df0 * S[0, 1] + df1 * S[1, 1]
-    lk = tri_lock[f]
-    kA = lk[1] * tri_area[f]
-    t0 = wp.vec3(0.0)
-    t1 = wp.vec3(0.0)
-    v0 = wp.vec2(0.0)
-    v1 = wp.vec2(0.0)
-    if kA > 0.0:
-        for d in range(2):
-            v, u, beta = _lock_direction(f0, f1, lk[0], d)
-            if beta > 0.0:
-                wd = df0 * v[0] + df1 * v[1]
-                along = u * wp.dot(u, wd)
-                t = (along + (wd - along) * beta) * kA
-                if d == 0:
-                    t0 = t
-                    v0 = v
-                else:
-                    t1 = t
-                    v1 = v
     for j in range(3):
         c = _corner_weights(D, j)
-        out[f, j] = ((f0 * (c[0] * ta + c[1] * ts) + f1 * (c[1] * tb + c[0] * ts) + g0 * c[0] + g1 * c[1]) * A
-                     + t0 * wp.dot(v0, c) + t1 * wp.dot(v1, c))
+        out[f, j] = (f0 * (c[0] * ta + c[1] * ts) + f1 * (c[1] * tb + c[0] * ts) + g0 * c[0] + g1 * c[1]) * A
 
 
 @wp.kernel

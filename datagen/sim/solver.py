@@ -495,8 +495,7 @@ class SolverVBD:
                                                           self.cg_edge_part, self.cg_force, self.cg_diag_other])
             if step == 0:
                 wp.launch(N.element_diagonal, n, inputs=[m.dm_inv, self.cg_face_frame, self.cg_face_law,
-                                                         self.cg_face_stress, self.cg_face_scale, m.tri_area,
-                                                         m.tri_lock, m.edges,
+                                                         self.cg_face_stress, self.cg_face_scale, m.edges,
                                                          self.cg_hinge_grad, self.cg_hinge_scale, m.v2f_offsets,
                                                          m.v2f, m.v2e_offsets, m.v2e, self.cg_diag_el])
                 wp.launch(N.invert_blocks, n, inputs=[self.cg_diag_other, self.cg_diag_el, m.active, self.cg_inverse])
@@ -535,8 +534,8 @@ class SolverVBD:
 
         m = self.model
         wp.launch(N.membrane_product, m.face_count, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
-                                                            self.cg_face_stress, self.cg_face_scale, m.tri_area,
-                                                            m.tri_lock, p, self.cg_face_part])
+                                                            self.cg_face_stress, self.cg_face_scale, p,
+                                                            self.cg_face_part])
         wp.launch(N.bending_product, m.edge_count, inputs=[m.edges, self.cg_hinge_grad, self.cg_hinge_scale, p,
                                                            self.cg_edge_part])
         wp.launch(N.gather_product, m.particle_count, inputs=[self.cg_diag_other, p, m.v2f_offsets, m.v2f,
