@@ -238,7 +238,8 @@ def main(argv=None) -> None:
     ap.add_argument("--edges", default="0.01,0.015")
     ap.add_argument("--frames", type=int, default=10, help="frames of the rim and edge cases")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a SolverConfig field")
-    ap.add_argument("--inputs", default="sim_inputs.npz", help="the cost case's scene (python -m benchmarks sim prepare)")
+    ap.add_argument("--inputs", default="sim_inputs.npz",
+                    help="the cost case's scene (python -m benchmarks sim prepare)")
     args = ap.parse_args(argv)
     args.fps = [float(s) for s in args.fps.split(",")]
     args.edges = [float(s) for s in args.edges.split(",")]
