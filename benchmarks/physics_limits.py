@@ -16,9 +16,15 @@ static answer where there is one:
   18 cm cylinder with a square rim (the Cusick set-up without the rounding), self-collision on.
 - ``edge``: the Cusick disc on the rounded support (``benchmarks/cusick.py``) at ``--edges`` edge
   lengths, self-collision on.
+- ``cost``: the production scene of ``python -m benchmarks sim prepare`` (the T-shirt walking, its
+  ``--inputs`` .npz), ``--frames`` frames after two: CPU ms a frame in all and in the global step,
+  and how far the global step's conjugate gradients get (each Newton step's rᵀP⁻¹r after its last
+  iteration over before its first: median and 90th percentile over the substeps). The preset
+  list does not apply (the garment's own material).
 
-    python -m benchmarks physics-limits [--cases fps,release,rim,edge] [--presets cotton,denim]
+    python -m benchmarks physics-limits [--cases fps,release,rim,edge,cost] [--presets cotton,denim]
         [--fps 5,15,30,60] [--strain 0.35] [--edges 0.01,0.015] [--frames 10] [--set KEY=VALUE ...]
+        [--inputs sim_inputs.npz]
 
 The ``rim`` and ``edge`` cases run ``--frames`` frames (the energy is made in the first ones); each
 line ends with the CPU time per substep.
@@ -189,6 +195,36 @@ def case_edge(mat, config, args) -> None:
               f"frame {worst + 1} (gravity's work {r.work:.2e} J), {r.per_substep * 1e3:.2f} ms/substep", flush=True)
 
 
+def case_cost(config, args) -> None:
+    from benchmarks.common import play, prepared_batch, scene_name
+    from datagen.sim.probes import CgTrace
+
+    d = np.load(args.inputs)
+    batch, frames = prepared_batch(d, 1, "cpu", args.frames + 2, config)
+    solver, a, c, ctrl = batch.solver, batch.a, batch.c, batch.control
+    a, c = play(solver, a, c, ctrl, frames[1:3])  # compiles, settles the first contacts
+    spent = [0.0]
+    inner = solver._global_step
+
+    def timed(x, h):
+        t0 = time.perf_counter()
+        inner(x, h)
+        spent[0] += time.perf_counter() - t0
+    solver._global_step = timed
+    trace = CgTrace()
+    solver.probes = (trace,)
+    t = time.perf_counter()
+    a, c = play(solver, a, c, ctrl, frames[3:])
+    wall = (time.perf_counter() - t) / (len(frames) - 3)
+    ratio = np.array([e[-1].max() / max(e[0].max(), 1e-300) for e in trace.entries])  # over the cold start
+    s = config.steps
+    steps, warm = getattr(s, "global_steps", 1), getattr(s, "warm_start", False)  # (the code before them had neither)
+    print(f"cost     {scene_name(d)} {len(d['garment'])} vertices, {steps} x {s.global_iterations} CG, "
+          f"warm start {'on' if warm else 'off'}, {s.iterations} sweeps: {wall * 1e3:.0f} ms/frame, global step "
+          f"{spent[0] / (len(frames) - 3) * 1e3:.0f} ms/frame; CG r'P^-1 r end/start median {np.median(ratio):.2e}, "
+          f"90th percentile {np.quantile(ratio, 0.9):.2e} over {len(ratio)} Newton steps", flush=True)
+
+
 CASES = {"fps": case_fps, "release": case_release, "rim": case_rim, "edge": case_edge}
 
 
@@ -202,6 +238,8 @@ def main(argv=None) -> None:
     ap.add_argument("--edges", default="0.01,0.015")
     ap.add_argument("--frames", type=int, default=10, help="frames of the rim and edge cases")
     ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE", help="a SolverConfig field")
+    ap.add_argument("--inputs", default="sim_inputs.npz",
+                    help="the cost case's scene (python -m benchmarks sim prepare)")
     args = ap.parse_args(argv)
     args.fps = [float(s) for s in args.fps.split(",")]
     args.edges = [float(s) for s in args.edges.split(",")]
@@ -213,6 +251,9 @@ def main(argv=None) -> None:
             else val)
     config = SolverConfig(**kw)
     for case in args.cases.split(","):
+        if case == "cost":
+            case_cost(config, args)
+            continue
         for name in args.presets.split(","):
             CASES[case](MATERIALS[name], config, args)
 

@@ -32,7 +32,9 @@ class SolverProbe(Protocol):
 
     def global_residual(self, solver, iteration: int, rz, last: bool) -> None:
         """The global step's per-scene rᵀP⁻¹r [scene_count] float64 before its conjugate-gradient
-        iteration ``iteration`` (0: before the first) and after the last (``last``: no iteration follows)."""
+        iteration ``iteration`` (0: before the first) and after the last (``last``: no iteration follows);
+        with ``StepConfig.warm_start`` a Newton step's first call is ``iteration`` -1, the cold start
+        d = 0 (fᵀP⁻¹f), and 0 is then the warm start's."""
 
 
 class Probe:
@@ -67,17 +69,20 @@ class SweepTrace(Probe):
 
 
 class CgTrace(Probe):
-    """The global step's convergence: ``entries`` gets one array a global step, its per-scene
-    rᵀP⁻¹r before the first conjugate-gradient iteration and after each one,
-    [global_iterations + 1, scene_count] float64."""
+    """The global step's convergence: ``entries`` gets one array a Newton step of the global step,
+    its per-scene rᵀP⁻¹r before the first conjugate-gradient iteration and after each one,
+    [global_iterations + 1, scene_count] float64 (with a warm start, its cold start first:
+    [global_iterations + 2, scene_count])."""
 
     def __init__(self):
         self.entries: list[np.ndarray] = []
         self._rows: list[np.ndarray] = []
+        self._cold = False
 
     def global_residual(self, solver, iteration: int, rz, last: bool) -> None:
-        if iteration == 0:
+        if iteration == -1 or iteration == 0 and not self._cold:  # a Newton step starts
             self._rows = []
+        self._cold = iteration == -1
         self._rows.append(rz.numpy().copy())
         if last:
             self.entries.append(np.stack(self._rows))

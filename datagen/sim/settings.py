@@ -75,10 +75,20 @@ class StepConfig:
             energy at 10 substeps, none at 15; at 13 still 1.5e-3 of gravity's work). The default,
             1.5 cm, is the edge length the presets and the Cusick test are fitted at; of the garment
             types' default meshes only the skirt's (1.3 cm) gets more (12 at 30 fps).
+        substep_cap: the most substeps the rule of :meth:`substeps_for` may ask for a step, 1-1000:
+            a frame time or an edge length that needs more (a mesh of 1 mm edges at 30 fps, a frame
+            of 0.5 s) is refused with an :class:`~datagen.errors.InputError` that says what to change,
+            rather than run for hours (``substeps`` itself may be set higher).
         iterations: colour sweeps per substep, 1-200.
         global_iterations: conjugate-gradient iterations of the global Newton step that starts every
             substep (:mod:`datagen.sim.newton_kernels`), 0-1000; 0: off, the sweeps alone (which
             carry a load one vertex per sweep: woven cloth needs it carried across the garment at once).
+        global_steps: Newton steps of the global step, 1-10, each ``global_iterations`` conjugate-gradient
+            iterations from the elements relinearised where the last one ended (its forces, each
+            element's deformation, its branch of the buckling law); the preconditioner is the first's.
+        warm_start: start the global step's conjugate gradients from the correction the last substep's
+            solve made to its initial guess (scaled per scene to the step along it that minimises the
+            quadratic model, within [0, 1]) instead of from zero (``newton_kernels.warm_start``).
         compression_hessian: the stiffness the global step's Hessian gives a direction in
             compression: ``buckled`` (the buckling branch's, r x the tension stiffness, the
             curvature at x) or ``tension`` (the tension branch's, which bounds the membrane's
@@ -98,8 +108,11 @@ class StepConfig:
     substeps: int = _limit(10, min=1, max=200)
     max_substep: float = _limit(1.0 / 300.0, "s", above=0.0, max=0.1)
     substep_edge: float = _limit(0.015, "m", min=0.0)
+    substep_cap: int = _limit(100, min=1, max=1000)
     iterations: int = _limit(20, min=1, max=200)
     global_iterations: int = _limit(20, min=0, max=1000)
+    global_steps: int = _limit(1, min=1, max=10)
+    warm_start: bool = True
     compression_hessian: str = field(default="buckled", metadata={"choices": ("buckled", "tension")})
     chebyshev_rho: float = _limit(0.7, min=0.0, below=1.0)
     chebyshev_contacts: bool = True
@@ -112,11 +125,28 @@ class StepConfig:
     def substeps_for(self, dt: float, edge: float = 0.0) -> int:
         """Substeps of a step of ``dt`` [s] on a mesh of edge length ``edge`` [m] (0: not known):
         max(``substeps``, ⌈dt / (``max_substep`` x min(1, edge / ``substep_edge``))⌉), with a
-        relative 1e-6 of slack, so that 1/30 s at 1/300 s is 10, not 11 by rounding."""
+        relative 1e-6 of slack, so that 1/30 s at 1/300 s is 10, not 11 by rounding.
+
+        Raises :class:`~datagen.errors.InputError` where the rule asks for more than
+        ``substep_cap`` (and more than ``substeps``): the frame is too long or the mesh too fine
+        for the solver to hold its energy balance in a sane number of substeps."""
         longest = self.max_substep
         if edge > 0.0 and self.substep_edge > 0.0:
             longest *= min(1.0, edge / self.substep_edge)
-        return max(int(self.substeps), int(math.ceil(dt / longest * (1.0 - 1e-6))))
+        needed = int(math.ceil(dt / longest * (1.0 - 1e-6)))
+        if needed > max(int(self.substeps), int(self.substep_cap)):
+            fps_min = math.ceil(1.0 / (self.substep_cap * longest) * (1.0 - 1e-9))
+            edge_min = self.substep_edge * dt / (self.substep_cap * self.max_substep)
+            mesh = f" on a mesh of {edge * 1e3:.3g} mm edges" if edge > 0.0 else ""
+            coarser = (f", or mesh the cloth with edges of {edge_min * 1e3:.3g} mm or longer"
+                       if edge > 0.0 and edge_min <= self.substep_edge else "")
+            raise InputError(
+                f"a step of {dt:g} s{mesh} needs {needed} substeps of at most {longest:.3g} s "
+                f"(StepConfig.max_substep = {self.max_substep:.3g} s, shorter in proportion on a mesh finer than "
+                f"substep_edge = {self.substep_edge * 1e3:g} mm), more than StepConfig.substep_cap = "
+                f"{self.substep_cap}: simulate at {fps_min:g} frames/s or more (drape simulate --fps){coarser}, "
+                f"or raise substep_cap if you accept the cost (docs/simulator.md, physics limits)")
+        return max(int(self.substeps), needed)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -264,7 +294,9 @@ class LaunchConfig:
 
 
 FLAT_NAMES = {
-    "substeps": "steps.substeps", "max_substep": "steps.max_substep", "substep_edge": "steps.substep_edge", "iterations": "steps.iterations", "global_iterations": "steps.global_iterations",
+    "substeps": "steps.substeps", "max_substep": "steps.max_substep", "substep_edge": "steps.substep_edge", "substep_cap": "steps.substep_cap",
+    "iterations": "steps.iterations", "global_iterations": "steps.global_iterations",
+    "global_steps": "steps.global_steps", "warm_start": "steps.warm_start",
     "compression_hessian": "steps.compression_hessian",
     "chebyshev_rho": "steps.chebyshev_rho", "chebyshev_contacts": "steps.chebyshev_contacts",
     "chebyshev_body_contacts": "steps.chebyshev_body_contacts", "colour_hinge_wings": "steps.colour_hinge_wings",

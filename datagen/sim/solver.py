@@ -139,6 +139,8 @@ class SolverVBD:
             self.slip = wp.zeros(n, dtype=float)
             self.v_old = z3(n)
             self.scene_frozen = wp.zeros(m.scene_count, dtype=wp.int32)  # 1: frozen (:meth:`freeze`)
+            # the last substep's correction to its initial guess, where the next global step starts
+            self.cg_warm, self.x_init = z3(n), z3(n)
             if self.config.steps.global_iterations:  # the global step's vectors, blocks and per-scene scalars
                 self.cg_force, self.cg_r, self.cg_z, self.cg_p, self.cg_q, self.cg_d = (z3(n) for _ in range(6))
                 self.cg_diag_other, self.cg_diag_el, self.cg_inverse = (wp.zeros(n, dtype=wp.mat33) for _ in range(3))
@@ -158,7 +160,7 @@ class SolverVBD:
             P = m.body_part_count
             self.body_lambda = wp.zeros((n, P), dtype=float)
             # copies of what a step carries over from the last besides the state, for a redo
-            self._lagged_saved = (wp.zeros((n, P), dtype=float), z3(n), wp.zeros(n, dtype=float))
+            self._lagged_saved = (wp.zeros((n, P), dtype=float), z3(n), wp.zeros(n, dtype=float), z3(n))
             self.body_has = wp.zeros((n, P), dtype=wp.int32)
             self.body_point, self.body_normal, self.body_disp = (wp.zeros((n, P), dtype=wp.vec3) for _ in range(3))
             self.body_radius = wp.array(m.host.thickness.astype(np.float32) + self.config.body.margin, dtype=float)
@@ -339,10 +341,11 @@ class SolverVBD:
             raise InputError(f"time step must be > 0, got {dt}")
         # what a step carries over from the last one besides the state (the body's normal forces,
         # lagged for friction; the velocity before the last substep; the slide along the body over
-        # the last substep, lagged for the global step's friction): a redo starts from it again,
+        # the last substep, lagged for the global step's friction; the last substep's correction to
+        # its initial guess, where the global step starts): a redo starts from it again,
         # so a step redone after its buffers grew gives what a step with big enough buffers gives,
         # and a scene does not depend on whether another scene of its batch overflowed
-        lagged = (self.body_lambda, self.v_old, self.slip)
+        lagged = (self.body_lambda, self.v_old, self.slip, self.cg_warm)
         if self.config.self_contact.enabled:  # only cloth-cloth contact lists can overflow
             for a, b in zip(lagged, self._lagged_saved):
                 wp.copy(b, a)
@@ -460,55 +463,84 @@ class SolverVBD:
                                                                   self.config.self_contact.untangle_step, x])
 
     def _global_step(self, x, h: float) -> None:
-        """One Newton step of the substep's incremental potential from the initial guess ``x``,
-        solved by block-Jacobi preconditioned conjugate gradients (per scene), each vertex's move
-        kept within its conservative bound (see :mod:`datagen.sim.newton_kernels`)."""
+        """``global_steps`` Newton steps of the substep's incremental potential from the initial
+        guess ``x``, each solved by ``global_iterations`` iterations of block-Jacobi preconditioned
+        conjugate gradients (per scene), each vertex's move kept within its conservative bound (see
+        :mod:`datagen.sim.newton_kernels`). Every step relinearises the elements and the forces at
+        the x the last one reached; the preconditioner is the first step's."""
         import warp as wp
 
         from datagen.sim import newton_kernels as N
 
         m, c = self.model, self.config
         n, nf, ne = m.particle_count, m.face_count, m.edge_count
-        wp.launch(N.vertex_force_diagonal, n, inputs=[x, self.verts, self.membrane, self.bending, self.body_contact,
-                                                      self.substep, self.cg_force, self.cg_diag_other])
-        # x stays put while the iterations run: each element is linearised once, not once an iteration
         majorise = int(c.steps.compression_hessian == "tension")
-        wp.launch(N.membrane_linearise, nf, inputs=[x, m.faces, m.dm_inv, m.tri_area, m.tri_stiff, m.damping, h,
-                                                    majorise, self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
-                                                    self.cg_face_scale])
-        wp.launch(N.bending_linearise, ne, inputs=[x, m.edges, m.bend_k, m.damping, h, self.cg_hinge_grad,
-                                                   self.cg_hinge_scale])
-        wp.launch(N.element_diagonal, n, inputs=[m.dm_inv, self.cg_face_frame, self.cg_face_law, self.cg_face_stress,
-                                                 self.cg_face_scale, m.edges, self.cg_hinge_grad, self.cg_hinge_scale,
-                                                 m.v2f_offsets, m.v2f, m.v2e_offsets, m.v2e, self.cg_diag_el])
-        wp.launch(N.invert_blocks, n, inputs=[self.cg_diag_other, self.cg_diag_el, m.active, self.cg_inverse])
         p, q, r, z = self.cg_p, self.cg_q, self.cg_r, self.cg_z
-        rz, rz_new = self.cg_rz, self.cg_rz_new
         ranges, scenes = self.particle_range, [m.scene_count]
+        probes = self.probes
 
         def dot(a, b, out):
             wp.launch_tiled(N.scene_dot, dim=scenes, block_dim=N.DOT_LANES, inputs=[a, b, ranges, out])
 
-        wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
-        dot(r, z, rz)
-        probes = self.probes
-        for probe in probes:
-            probe.global_residual(self, 0, rz, c.steps.global_iterations == 0)
-        for it in range(c.steps.global_iterations):
-            wp.launch(N.membrane_product, nf, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
-                                                      self.cg_face_stress, self.cg_face_scale, p, self.cg_face_part])
-            wp.launch(N.bending_product, ne, inputs=[m.edges, self.cg_hinge_grad, self.cg_hinge_scale, p,
-                                                     self.cg_edge_part])
-            wp.launch(N.gather_product, n, inputs=[self.cg_diag_other, p, m.v2f_offsets, m.v2f, m.v2e_offsets,
-                                                   m.v2e, self.cg_face_part, self.cg_edge_part, q])
-            dot(p, q, self.cg_pq)
-            wp.launch(N.cg_step, n, inputs=[p, q, self.cg_inverse, m.particle_scene, rz, self.cg_pq, self.cg_d, r, z])
-            dot(r, z, rz_new)
-            wp.launch(N.cg_direction, n, inputs=[z, m.particle_scene, rz, rz_new, p])
-            rz, rz_new = rz_new, rz
+        for step in range(c.steps.global_steps):
+            # x stays put while the iterations run: each element is linearised once a Newton step,
+            # and its force shares (into the product buffers, free until the iterations start) with it
+            wp.launch(N.membrane_linearise, nf, inputs=[x, self.x_prev, m.faces, m.dm_inv, m.tri_area, m.tri_stiff,
+                                                        m.damping, h, majorise, self.cg_face_frame, self.cg_face_law,
+                                                        self.cg_face_stress, self.cg_face_scale, self.cg_face_part])
+            wp.launch(N.bending_linearise, ne, inputs=[x, self.x_prev, m.edges, m.rest_angle, m.bend_k, m.damping, h,
+                                                       self.cg_hinge_grad, self.cg_hinge_scale, self.cg_edge_part])
+            wp.launch(N.vertex_force_diagonal, n, inputs=[x, self.verts, self.membrane, self.bending,
+                                                          self.body_contact, self.substep, self.cg_face_part,
+                                                          self.cg_edge_part, self.cg_force, self.cg_diag_other])
+            if step == 0:
+                wp.launch(N.element_diagonal, n, inputs=[m.dm_inv, self.cg_face_frame, self.cg_face_law,
+                                                         self.cg_face_stress, self.cg_face_scale, m.edges,
+                                                         self.cg_hinge_grad, self.cg_hinge_scale, m.v2f_offsets,
+                                                         m.v2f, m.v2e_offsets, m.v2e, self.cg_diag_el])
+                wp.launch(N.invert_blocks, n, inputs=[self.cg_diag_other, self.cg_diag_el, m.active, self.cg_inverse])
+            rz, rz_new = self.cg_rz, self.cg_rz_new
+            wp.launch(N.cg_start, n, inputs=[self.cg_force, self.cg_inverse, m.active, r, z, p, self.cg_d])
+            if step == 0 and c.steps.warm_start:
+                if probes:  # they see the cold start's rᵀP⁻¹r = fᵀP⁻¹f first (iteration -1)
+                    dot(r, z, rz)
+                    for probe in probes:
+                        probe.global_residual(self, -1, rz, False)
+                self._product(self.cg_warm, q)
+                dot(r, self.cg_warm, self.cg_rz)
+                dot(self.cg_warm, q, self.cg_pq)
+                wp.launch(N.warm_start, n, inputs=[self.cg_warm, q, self.cg_inverse, m.particle_scene, self.cg_rz,
+                                                   self.cg_pq, m.active, self.cg_d, r, z, p])
+            dot(r, z, rz)
             for probe in probes:
-                probe.global_residual(self, it + 1, rz, it + 1 == c.steps.global_iterations)
-        wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound_end, self.bound_global, m.active, x])
+                probe.global_residual(self, 0, rz, c.steps.global_iterations == 0)
+            for it in range(c.steps.global_iterations):
+                self._product(p, q)
+                dot(p, q, self.cg_pq)
+                wp.launch(N.cg_step, n, inputs=[p, q, self.cg_inverse, m.particle_scene, rz, self.cg_pq, self.cg_d, r,
+                                                z])
+                dot(r, z, rz_new)
+                wp.launch(N.cg_direction, n, inputs=[z, m.particle_scene, rz, rz_new, p])
+                rz, rz_new = rz_new, rz
+                for probe in probes:
+                    probe.global_residual(self, it + 1, rz, it + 1 == c.steps.global_iterations)
+            wp.launch(N.apply_step, n, inputs=[self.cg_d, self.x_det, self.bound_end, self.bound_global, m.active, x])
+
+    def _product(self, p, q) -> None:
+        """q = H p with the global step's Hessian at its linearisation (element by element)."""
+        import warp as wp
+
+        from datagen.sim import newton_kernels as N
+
+        m = self.model
+        wp.launch(N.membrane_product, m.face_count, inputs=[m.faces, m.dm_inv, self.cg_face_frame, self.cg_face_law,
+                                                            self.cg_face_stress, self.cg_face_scale, p,
+                                                            self.cg_face_part])
+        wp.launch(N.bending_product, m.edge_count, inputs=[m.edges, self.cg_hinge_grad, self.cg_hinge_scale, p,
+                                                           self.cg_edge_part])
+        wp.launch(N.gather_product, m.particle_count, inputs=[self.cg_diag_other, p, m.v2f_offsets, m.v2f,
+                                                              m.v2e_offsets, m.v2e, self.cg_face_part,
+                                                              self.cg_edge_part, q])
 
     def _solve_colour(self, col, x, out) -> None:
         """One sweep of colour ``col`` (its vertices' Newton steps from ``x``, written to ``out``),
@@ -574,6 +606,8 @@ class SolverVBD:
                                                      wp.vec3(*c.gravity), h, self.body_lambda, self.bound,
                                                      m.active, x])
                 if c.steps.global_iterations:
+                    if c.steps.warm_start:
+                        wp.copy(self.x_init, x)
                     self._global_step(x, h)
                 wp.copy(self.x_nm1, x)
                 omega, cheb = 1.0, 0
@@ -609,6 +643,10 @@ class SolverVBD:
                     wp.launch(K.record_slip, n, inputs=[x, self.x_prev, self.body_has, self.body_normal, self.body_disp,
                                                         self.body_lambda, self.slip])
                 wp.launch(K.update_velocity, n, inputs=[x, self.x_prev, h, v, self.v_old])
+                if c.steps.global_iterations and c.steps.warm_start:
+                    from datagen.sim import newton_kernels as N
+
+                    wp.launch(N.record_correction, n, inputs=[x, self.x_init, m.active, self.cg_warm])
                 if c.projection.enabled:
                     for again in range(2):  # a second pass for vertices the first put into another body part
                         wp.launch(self._kernel["test_inside_body"], n, inputs=[

@@ -45,7 +45,7 @@ def test_traces_record_every_step_and_change_nothing():
     assert np.array_equal(plain.view(np.uint32), traced.view(np.uint32))
     assert len(cg) == 3 * substeps  # one global step a substep
     for rz in cg:
-        assert rz.shape == (GLOBAL + 1, 1)
+        assert rz.shape == (GLOBAL + 2, 1)  # the cold start (d = 0), the warm start, each iteration
         assert np.isfinite(rz).all() and (rz >= 0).all()
         assert rz[0, 0] > 0 and rz[-1, 0] < rz[0, 0]  # the iterations reduce the residual
     assert len(sweeps) == 3 * substeps * ITERATIONS  # one entry a sweep
