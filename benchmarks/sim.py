@@ -115,7 +115,8 @@ def _phase(name: str) -> str:
         if key in name:
             return phase
     if any(k in name for k in ("membrane_product", "bending_product", "gather_product", "chunk_dot", "scene_sum", "scene_dot",
-                               "cg_", "_linearise", "vertex_force_diagonal", "element_diagonal", "invert_blocks", "apply_step")):
+                               "cg_", "_linearise", "vertex_force_diagonal", "element_diagonal", "invert_blocks", "apply_step",
+                               "warm_start", "record_correction")):
         return "global step"
     if "refit" in name.lower() or "bvh" in name.lower() or "mesh" in name.lower():
         return "BVH/mesh builtins"
