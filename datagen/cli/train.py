@@ -7,19 +7,22 @@ import json
 import sys
 from pathlib import Path
 
+from datagen.cli import args as checks
+
 
 def _run_arguments(p, config_class: str) -> None:
     """The arguments every `drape train MODEL` takes."""
     p.add_argument("--data", required=True, help="the dataset store")
-    p.add_argument("--out", required=True, help="the run directory")
+    p.add_argument("--out", required=True, type=checks.out_dir, help="the run directory")
     p.add_argument("--config", default=None, help=f"training config (.toml/.yaml/.json; fields of {config_class})")
-    p.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
-    p.add_argument("--max-minutes", type=float, default=None,
+    p.add_argument("--epochs", type=checks.count, default=None, help="most epochs (overrides the config)")
+    p.add_argument("--max-minutes", type=checks.number(0, above=True), default=None,
                    help="wall-time limit in minutes (overrides the config); with --resume the limit counts the "
                         "time already trained, so give the new total")
     p.add_argument("--device", default="auto", help="cpu, cuda or auto")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
-    p.add_argument("--force", action="store_true", help="replace the run in --out")
+    again = p.add_mutually_exclusive_group()  # both together: refused before the run directory is touched
+    again.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    again.add_argument("--force", action="store_true", help="replace the run in --out")
 
 
 def _train_config(cls, args, **overrides):
@@ -61,10 +64,10 @@ def register(sub, formatter) -> None:
                           "--out runs/skirt-refined")
     f.add_argument("--garment-model", required=True)
     f.add_argument("--motion-model", required=True)
-    f.add_argument("--out", required=True, help="the refined run directory")
-    f.add_argument("--samples", type=int, default=64, help="motions sampled for the fine-tuning")
-    f.add_argument("--steps", type=int, default=200, help="optimiser steps (one sequence each)")
-    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--out", required=True, type=checks.out_dir, help="the refined run directory")
+    f.add_argument("--samples", type=checks.count, default=64, help="motions sampled for the fine-tuning")
+    f.add_argument("--steps", type=checks.count, default=200, help="optimiser steps (one sequence each)")
+    f.add_argument("--seed", type=checks.seed, default=0)
     f.add_argument("--device", default="auto")
     f.add_argument("--force", action="store_true", help="replace the run in --out")
     f.add_argument("--latent", default="posterior", choices=("posterior", "prior"),
@@ -82,10 +85,10 @@ def register(sub, formatter) -> None:
     s.add_argument("--label", required=True,
                    help="one of the labels the model was trained on; several separated by commas, or all (each "
                         "label's motions then go into OUT/<label>/, the model loaded once)")
-    s.add_argument("--count", type=int, default=8)
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--out", required=True, help="a directory for the .npz files")
-    s.add_argument("--frames", type=int, default=None,
+    s.add_argument("--count", type=checks.integer(1, 100_000), default=8)
+    s.add_argument("--seed", type=checks.seed, default=0)
+    s.add_argument("--out", required=True, type=checks.out_dir, help="a directory for the .npz files")
+    s.add_argument("--frames", type=checks.integer(2, 100_000), default=None,
                    help="frames per motion (default: the segment length it was trained on). `drape generate` "
                         "with file: motions needs the recorded frames plus the ramp (e.g. 75 for 60 recorded)")
     s.add_argument("--device", default="cpu", help="cpu, cuda or auto")
@@ -111,9 +114,9 @@ def register(sub, formatter) -> None:
     c.add_argument("--motion-model", default=None, help="a run directory of `drape train motion` (with --label)")
     c.add_argument("--label", default=None, help="the motion's label (sampled from --motion-model)")
     c.add_argument("--motion", default=None, help="a motion .npz to dress instead of a sampled one")
-    c.add_argument("--seed", type=int, default=0)
-    c.add_argument("--out", required=True, help="a .usd/.usda/.usdc file")
-    c.add_argument("--video", default=None, help="also render a .mp4 or .gif of it")
+    c.add_argument("--seed", type=checks.seed, default=0)
+    c.add_argument("--out", required=True, type=checks.out_file(".usd", ".usda", ".usdc"), help="a .usd/.usda/.usdc file")
+    c.add_argument("--video", default=None, type=checks.out_file(".mp4", ".gif"), help="also render a .mp4 or .gif of it")
     c.add_argument("--device", default="cpu", help="cpu, cuda or auto")
     c.add_argument("--no-push-out", action="store_true",
                    help="keep garment vertices that end inside the body (no post-process)")
@@ -133,10 +136,10 @@ def register(sub, formatter) -> None:
     p.add_argument("run", help="a run directory of `drape train`")
     p.add_argument("--data", default=None, help="the store (default: the one it trained on)")
     p.add_argument("--split", default="test", choices=("train", "val", "test"))
-    p.add_argument("--max-frames", type=int, default=None, help="evaluate this many frames, drawn evenly")
+    p.add_argument("--max-frames", type=checks.count, default=None, help="evaluate this many frames, drawn evenly")
     p.add_argument("--device", default="auto")
-    p.add_argument("--json", default=None, metavar="FILE", help="also write the figures as JSON")
-    p.add_argument("--repetitions", type=int, default=20,
+    p.add_argument("--json", default=None, type=checks.out_file(".json"), metavar="FILE", help="also write the figures as JSON")
+    p.add_argument("--repetitions", type=checks.integer(1, 10_000), default=20,
                    help="motion generator: generated sets drawn for Table 4's figures (paper: 20)")
     p.add_argument("--no-generation", action="store_true",
                    help="motion generator: Table 3's reconstruction only (no recogniser, no generated sets)")
@@ -148,9 +151,10 @@ def register(sub, formatter) -> None:
                        "for `drape preview STORE --sample ID --prediction PRED.npz --color-by error`.")
     p.add_argument("run")
     p.add_argument("--data", required=True)
-    p.add_argument("--sample", type=int, required=True)
-    p.add_argument("--out", required=True, help="a .usd/.usda/.usdc file (the .npz goes beside it)")
-    p.add_argument("--max-error", type=float, default=30.0, help="error (mm) shown as the hottest colour")
+    p.add_argument("--sample", type=checks.integer(0), required=True)
+    p.add_argument("--out", required=True, type=checks.out_file(".usd", ".usda", ".usdc"),
+                   help="a .usd/.usda/.usdc file (the .npz goes beside it)")
+    p.add_argument("--max-error", type=checks.number(0, above=True), default=30.0, help="error (mm) shown as the hottest colour")
     p.set_defaults(func=_cmd_predict)
 
 
