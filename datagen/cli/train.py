@@ -3,7 +3,9 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import shutil
 import sys
 from pathlib import Path
 
@@ -174,12 +176,36 @@ def _cmd_train(args) -> int:
 
     kind = get_kind(args.kind)
     config = _train_config(kind.config_class(), args, **kind.overrides(args))
-    result = kind.part("train")(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
+    if args.force and (Path(args.out) / "run.json").is_file():
+        # --force deletes the run there: every shard the new run reads is checked first, so that a damaged
+        # store is refused while the old run is still there
+        from datagen.store import open_store
+
+        open_store(args.data).check_files()
+    with _kept_only_if_started(Path(args.out)):
+        result = kind.part("train")(args.data, args.out, config, device=args.device, resume=args.resume,
+                                    force=args.force)
     report = kind.part("report")
     print(report(result, config) if report is not None else
           f"trained {result['epochs']} epochs in {result['seconds']:.0f} s; best validation value {result['best']} "
           f"({result['best_checkpoint']})")
     return _diverged(result, config)
+
+
+@contextlib.contextmanager
+def _kept_only_if_started(out: Path):
+    """A run directory that this command created is removed again when the command is refused (a
+    :class:`~datagen.errors.DrapeError`, e.g. a damaged store found by a DataLoader worker) before the
+    run wrote its first checkpoint: a refusal leaves nothing behind. One that was there is left as it is."""
+    from datagen.errors import DrapeError
+
+    existed = out.exists()
+    try:
+        yield
+    except DrapeError:
+        if not existed and out.is_dir() and not any((out / "checkpoints").glob("*.ckpt")):
+            shutil.rmtree(out, ignore_errors=True)
+        raise
 
 
 def _cmd_refine(args) -> int:
@@ -189,8 +215,9 @@ def _cmd_refine(args) -> int:
         from datagen.errors import InputError
 
         raise InputError(f"--seed must be 0 or more, got {args.seed}")
-    r = refine_garment(args.garment_model, args.motion_model, args.out, samples=args.samples, steps=args.steps,
-                       seed=args.seed, device=args.device, force=args.force, latent=args.latent)
+    with _kept_only_if_started(Path(args.out)):
+        r = refine_garment(args.garment_model, args.motion_model, args.out, samples=args.samples, steps=args.steps,
+                           seed=args.seed, device=args.device, force=args.force, latent=args.latent)
     print(f"refined {args.garment_model} into {args.out}: {r['steps']} steps on {r['sampled'] - r['dropped']} sampled "
           f"motions ({r['dropped']} dropped for heavy interpenetration), loss {r['loss_first']:.4f} -> "
           f"{r['loss_last']:.4f}; garment vertices inside the body on {r['held_out']} held-out sampled motions: "

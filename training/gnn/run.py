@@ -22,6 +22,8 @@ from datagen.errors import InputError
 from datagen.store import open_store
 from training.gnn.config import GNNConfig
 from training.gnn.data import FrameDataset
+from training.checkpoint import load_module as load_checkpoint
+from training.checkpoint import run_store
 from training.loop import (fit, prepare_run, resolve_device, run_checkpoint, seed_everything, store_identity,
                            write_summary)
 
@@ -55,8 +57,7 @@ def load_module(run: str | Path, *, checkpoint: str = "best"):
     from training.gnn.module import GNNModule
 
     meta, path = run_checkpoint(run, KIND, "paper 000's GNN", checkpoint=checkpoint)
-    module = GNNModule.load_from_checkpoint(path, map_location="cpu")
-    module.eval()
+    module = load_checkpoint(GNNModule, path, "paper 000's GNN")
     return module, meta, path
 
 
@@ -70,7 +71,7 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     from torch_geometric.utils import scatter
 
     module, meta, ckpt = load_module(run)
-    store = open_store(data or meta["store"]["path"])
+    store = run_store(meta, run, data)
     accelerator = resolve_device(device)
     dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
     module.to(dev)
