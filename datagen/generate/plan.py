@@ -146,6 +146,9 @@ _SEW_PLAN: dict = {}
 
 
 def _sew_worker_init(config) -> None:
+    from datagen.lifetime import die_with_parent
+
+    die_with_parent()  # a kill -9 of drape generate ends this worker too
     _SEW_PLAN["plan"] = Plan(config)
 
 

@@ -19,6 +19,7 @@ import numpy as np
 import torch
 
 from datagen.errors import InputError
+from datagen.lifetime import die_with_parent_worker
 from datagen.store import open_store
 from training.gnn.config import GNNConfig
 from training.gnn.data import FrameDataset
@@ -96,7 +97,8 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     # the run's DataLoader workers read and derive the frames (spawned: each opens the store itself)
     workers = int(meta["config"].get("workers", 0))
     loader = DataLoader(ds, batch_size=4, shuffle=False, num_workers=workers,
-                        multiprocessing_context="spawn" if workers else None)
+                        multiprocessing_context="spawn" if workers else None,
+                        worker_init_fn=die_with_parent_worker if workers else None)
     for batch in loader:
         batch = batch.to(dev)
         t = time.perf_counter()
