@@ -267,6 +267,7 @@ class DatasetStore:
         refuse before it writes anything. Raises :class:`~datagen.store.integrity.DamagedStoreError`."""
         guard = self.rows.guard
         for a in ARRAYS.values():
+            guard.check_metadata(a.path)  # an array's zarr.json missing or disagreeing: refused here too
             if a.written_by != "stage_sample" or samples is None:
                 guard.check(a.path)
         if samples is None:
