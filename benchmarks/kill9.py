@@ -47,28 +47,37 @@ def session_processes(sid: int) -> list[str]:
     return rows
 
 
-def kill_at(cmd: list[str], seconds: float) -> tuple[bool, list[str]]:
-    """Run ``cmd``, kill -9 it after ``seconds`` (if still running); (was killed, orphans left 3 s later)."""
+LINGER_SECONDS = 120.0
+"""How long the processes of a killed command are given to end. A worker armed with
+``die_with_parent`` ends at once; one still importing its modules at the kill (not yet armed) ends
+itself when its start-up line runs and finds its parent gone."""
+
+
+def kill_at(cmd: list[str], seconds: float) -> tuple[bool, list[str], float]:
+    """Run ``cmd``, kill -9 it after ``seconds`` (if still running); (was killed, processes of it left
+    after :data:`LINGER_SECONDS`, seconds until the last one ended)."""
     p = subprocess.Popen(cmd, env=ENV, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
     try:
         p.wait(timeout=seconds)
-        return False, []
+        return False, [], 0.0
     except subprocess.TimeoutExpired:
         pass
     os.kill(p.pid, signal.SIGKILL)
     p.wait()
+    t0 = time.perf_counter()
     orphans: list[str] = []
-    for _ in range(30):  # the kernel's SIGKILL to the children is immediate; their exit takes a moment
+    while time.perf_counter() - t0 < LINGER_SECONDS:
         orphans = session_processes(p.pid)
         if not orphans:
             break
         time.sleep(0.1)
+    lingered = time.perf_counter() - t0
     for line in orphans:  # leave the machine clean whatever the result
         try:
             os.kill(int(line.split()[0]), signal.SIGKILL)
         except (ProcessLookupError, ValueError):
             pass
-    return True, orphans
+    return True, orphans, lingered
 
 
 def run_ok(cmd: list[str]) -> float:
@@ -85,18 +94,23 @@ def generate_trials(work: Path, trials: int, rng: random.Random) -> list[dict]:
     cfg = work / "micro.json"
     cfg.write_text(json.dumps(MICRO))
     ref = work / "gen-ref.zarr"
-    seconds = run_ok(drape("generate", str(cfg), "--out", str(ref), "--workers", "1"))
-    print(f"generate: uninterrupted in {seconds:.0f} s", flush=True)
+    cold = run_ok(drape("generate", str(cfg), "--out", str(ref), "--workers", "1"))
+    warm_store = work / "gen-warm.zarr"  # the garment cache is filled now: every later run takes this long
+    seconds = run_ok(drape("generate", str(cfg), "--out", str(warm_store), "--workers", "1"))
+    print(f"generate: uninterrupted in {cold:.0f} s (garment cache cold), {seconds:.0f} s (warm; the kills are drawn "
+          f"in 1 .. {seconds:.0f} s), the two stores equal: {compare(ref, warm_store)['all_equal']}", flush=True)
+    shutil.rmtree(warm_store, ignore_errors=True)
     rows = []
     for k in range(trials):
         out = work / f"gen-{k}.zarr"
         at = rng.uniform(1.0, seconds)
-        killed, orphans = kill_at(drape("generate", str(cfg), "--out", str(out), "--workers", "1"), at)
+        killed, orphans, lingered = kill_at(drape("generate", str(cfg), "--out", str(out), "--workers", "1"), at)
         run_ok(drape("generate", str(cfg), "--out", str(out), "--workers", "1"))  # resumes
         equal = compare(ref, out)["all_equal"]
-        rows.append({"at_s": round(at, 1), "killed": killed, "orphans": orphans, "equal": equal})
+        rows.append({"at_s": round(at, 1), "killed": killed, "orphans": orphans, "equal": equal,
+                     "lingered_s": round(lingered, 1)})
         print(f"  generate trial {k}: kill -9 at {at:.1f} s ({'killed' if killed else 'had finished'}), orphans "
-              f"{len(orphans)}{': ' + '; '.join(orphans) if orphans else ''}, resumed store equal to the uninterrupted "
+              f"{len(orphans)}{': ' + '; '.join(orphans) if orphans else ''} (all its processes gone {lingered:.1f} s after the kill), resumed store equal to the uninterrupted "
               f"one: {equal}", flush=True)
         shutil.rmtree(out, ignore_errors=True)
     return rows
@@ -129,7 +143,7 @@ def train_trials(work: Path, trials: int, rng: random.Random, epochs: int) -> li
     for k in range(trials):
         out = work / f"run-{k}"
         at = rng.uniform(3.0, seconds)
-        killed, orphans = kill_at(drape(*train, "--out", str(out)), at)
+        killed, orphans, lingered = kill_at(drape(*train, "--out", str(out)), at)
         last = out / "checkpoints" / "last.ckpt"
         epoch = torch.load(last, map_location="cpu", weights_only=False)["epoch"] if last.is_file() else None
         if epoch is not None:  # resume from the last checkpoint; without one there is nothing to resume
@@ -140,10 +154,11 @@ def train_trials(work: Path, trials: int, rng: random.Random, epochs: int) -> li
         resumed_epochs = sorted(read_metrics(out, "train/loss_epoch", attempts=attempts[-1:]))
         equal = all(torch.equal(reference[n], w) for n, w in _weights(out).items()) and \
             set(reference) == set(_weights(out))
-        rows.append({"at_s": round(at, 1), "killed": killed, "orphans": orphans, "checkpoint_epoch": epoch,
+        rows.append({"at_s": round(at, 1), "killed": killed, "orphans": orphans, "lingered_s": round(lingered, 1),
+                     "checkpoint_epoch": epoch,
                      "resumed_epochs": resumed_epochs, "weights_equal": equal})
         print(f"  train trial {k}: kill -9 at {at:.1f} s ({'killed' if killed else 'had finished'}), orphans "
-              f"{len(orphans)}{': ' + '; '.join(orphans) if orphans else ''}, last checkpoint at epoch {epoch}, the "
+              f"{len(orphans)}{': ' + '; '.join(orphans) if orphans else ''} (all gone {lingered:.1f} s after the kill), last checkpoint at epoch {epoch}, the "
               f"{'resumed' if epoch is not None else 'restarted'} run trained epochs {resumed_epochs}, final weights "
               f"bitwise equal to the uninterrupted run: {equal}", flush=True)
         shutil.rmtree(out, ignore_errors=True)
