@@ -156,14 +156,11 @@ def test_kill_9_of_drape_generate_leaves_no_worker(tmp_path):
         time.sleep(2)
         os.kill(p.pid, signal.SIGKILL)
         p.wait()
-        deadline = time.time() + 5
+        # an armed worker ends at once; one still importing its modules ends itself at its start-up line
+        deadline = time.time() + 120
         while time.time() < deadline and _session(p.pid):
             time.sleep(0.1)
-        left = _session(p.pid)
-        if left:
-            import subprocess as sp
-            print(sp.run(["ps", "-o", "pid,ppid,sid,stat,args", "-p", ",".join(map(str, left))], capture_output=True, text=True).stdout)
-        assert left == [], "processes of drape generate left after kill -9"
+        assert _session(p.pid) == [], "processes of drape generate left 120 s after its kill -9"
     finally:
         for c in _session(p.pid):
             os.kill(c, signal.SIGKILL)
