@@ -534,7 +534,41 @@ def table_inputs(inputs):
         _damage(d / "store", d / "damaged")
         _runs(d)
         np.savez(d / "walk.npz", poses=np.zeros((4, 72)), trans=np.zeros((4, 3)), mocap_framerate=30.0, label="walk")
+        _bad_animations(d)
     return d
+
+
+def _bad_animations(d: Path) -> None:
+    """Animations of plain arrays with a NaN position or a face out of range, and a prediction with a NaN."""
+    from datagen.store import open_store
+
+    rng = np.random.default_rng(0)
+    v, b = rng.random((3, 10, 3), np.float32), rng.random((3, 12, 3), np.float32)
+    faces, body_faces = np.array([[0, 1, 2], [2, 3, 4]]), np.array([[0, 1, 2]])
+    nan = v.copy()
+    nan[1, 3] = np.nan
+    np.savez(d / "nan_positions.npz", garment_vertices=nan, garment_faces=faces, body_vertices=b, body_faces=body_faces,
+             fps=30.0)
+    np.savez(d / "faces_out_of_range.npz", garment_vertices=v, garment_faces=np.array([[0, 1, 99]]), body_vertices=b,
+             body_faces=body_faces, fps=30.0)
+    store = open_store(d / "store")
+    pred = np.zeros((store.frame_count(0), store.vertex_count(0), 3), np.float32)
+    pred[0, 0, 0] = np.nan
+    np.savez(d / "nan_prediction.npz", garment_vertices=pred)
+
+
+TABLE += [  # animations with NaN positions or faces out of range
+    ("preview-nan-positions", ["preview", "IN/nan_positions.npz", "--frame", "1", "--out", "OUT/p.png"], 2,
+     ["garment_vertices", "non-finite", "frame(s) [1]"], ["p.png"]),
+    ("preview-faces-out-of-range", ["preview", "IN/faces_out_of_range.npz", "--out", "OUT/p.png"], 2,
+     ["garment_faces", "outside 0 .. 9"], ["p.png"]),
+    ("export-nan-positions", ["export", "usd", "IN/nan_positions.npz", "--out", "OUT/a.usda"], 2,
+     ["garment_vertices", "non-finite"], ["a.usda"]),
+    ("export-faces-out-of-range", ["export", "usd", "IN/faces_out_of_range.npz", "--out", "OUT/a.usda"], 2,
+     ["garment_faces", "outside"], ["a.usda"]),
+    ("preview-nan-prediction", ["preview", "IN/store", "--sample", "0", "--prediction", "IN/nan_prediction.npz",
+                                "--color-by", "error", "--out", "OUT/p.png"], 2, ["prediction", "non-finite"], ["p.png"]),
+]
 
 
 @pytest.mark.parametrize("case", TABLE, ids=[c[0] for c in TABLE])

@@ -189,6 +189,9 @@ def _load_prediction(path: str, frame_count: int) -> np.ndarray:
     pred = np.asarray(d["garment_vertices"], np.float32)
     if pred.ndim != 3 or pred.shape[0] != frame_count:
         raise InputError(f"the prediction in {p} has shape {pred.shape}; the sample has {frame_count} frames")
+    if not np.isfinite(pred).all():
+        raise InputError(f"the prediction in {p} has non-finite values (NaN or inf) in frame(s) "
+                         f"{np.flatnonzero(~np.isfinite(pred).all(axis=(1, 2)))[:10].tolist()}")
     return pred
 
 
@@ -230,6 +233,9 @@ def _cmd_preview(args) -> int:
         if args.sample is not None:
             raise InputError(f"{source} is not a store; --sample is for stores")
         full = from_npz(source, **_npz_options(args))
+        from datagen.export.usd import check_animation
+
+        check_animation(full)  # NaN positions or faces out of range: refused before drawing
         T = full.frame_count
         index = parse_frames(spec, T)
         anim = full.frames(index)
