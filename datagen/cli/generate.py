@@ -40,7 +40,8 @@ def register(sub, formatter) -> None:
                    help="local executor: start no batch that would not end within this many minutes (judged by the "
                         "last batch); what is simulated stays staged, the same command continues it, and the exit "
                         "status is 75 while the store is unfinished")
-    p.add_argument("--batch-size", type=checks.count, default=None, metavar="N",
+    # --batch-size: checked against the config's limits (1..4096) by with_batch_size, before anything is made
+    p.add_argument("--batch-size", type=int, default=None, metavar="N",
                    help="scenes simulated together in one model, in place of the config's simulation.batch_size "
                         "(how the work is spread, not part of the store's identity: a run may be resumed with "
                         "another); e.g. a whole preset in one batch on a large GPU")
