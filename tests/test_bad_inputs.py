@@ -461,7 +461,7 @@ TABLE += [  # checkpoints: damaged, another model, a run whose store moved
     ("evaluate-store-moved", ["evaluate", "IN/gnnrun"], 2, ["no longer at", "--data"], []),
     ("train-resume-and-force", ["train", "gnn", "--data", "IN/store", "--out", "IN/gnnrun", "--resume", "--force"], 2,
      ["--force", "not allowed with", "--resume"], []),
-    ("refine-resume-and-force-not-a-run", ["train", "gnn", "--data", "IN/store", "--out", "OUT/run", "--force",
+    ("train-force-and-resume", ["train", "gnn", "--data", "IN/store", "--out", "OUT/run", "--force",
                                            "--resume"], 2, ["not allowed with"], ["run"]),
 ]
 
