@@ -121,6 +121,9 @@ CASES: tuple[Case, ...] = (
          summary="bytes per stored garment-frame per array, against schema 3; --codecs: position encodings"),
     Case(name="compare-stores", module="benchmarks.compare_stores", needs="two stores",
          summary="two stores array by array: bitwise equal or the largest difference (exit 1 if any differs)"),
+    Case(name="kill9", module="benchmarks.kill9",
+         summary="kill -9 of drape generate and drape train at random moments: orphans left, resumed store and "
+                 "training against uninterrupted ones"),
     Case(name="export", module="benchmarks.export_usd", needs="usd-core (pip install -e '.[usd]')",
          summary="writing a long dense animation to .usd/.usda: seconds, MB, frames/s, validation, read-back"),
     # the README

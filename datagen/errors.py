@@ -8,7 +8,32 @@ from __future__ import annotations
 
 
 class DrapeError(Exception):
-    """A user-facing error: the message says what is wrong and what to do about it."""
+    """A user-facing error: the message says what is wrong and what to do about it.
+
+    Raised in a torch DataLoader worker, it reaches the main process as the same class made again
+    from the worker's whole traceback text ("Caught X in DataLoader worker process N. Original
+    Traceback ..."): the message is then the original one, so the CLI still prints one line.
+    """
+
+    def __init__(self, *args):
+        if len(args) == 1 and isinstance(args[0], str):
+            args = (_unwrapped(args[0], type(self)),)
+        super().__init__(*args)
+
+
+_WORKER_TRACEBACK = "\nOriginal Traceback (most recent call last):"
+
+
+def _unwrapped(message: str, cls: type) -> str:
+    """The original message of ``cls`` inside a traceback text that torch's ``ExceptionWrapper``
+    wrapped around it (``message`` itself when it is not one)."""
+    if not (message.startswith("Caught ") and _WORKER_TRACEBACK in message):
+        return message
+    for name in (f"{cls.__module__}.{cls.__qualname__}: ", f"{cls.__qualname__}: "):
+        k = message.rfind(name)
+        if k >= 0:
+            return message[k + len(name):].strip()
+    return message
 
 
 class ConfigError(DrapeError, ValueError):

@@ -344,3 +344,237 @@ def test_beta_far_outside_the_population_warns(tmp_path, capsys, caplog, default
     with caplog.at_level("WARNING"):
         assert main(["body", "export", "--betas", "1000", "--out", str(out)]) == 0
     assert "beyond ±3" in caplog.text and "β[0]" in caplog.text and out.exists()
+
+
+# --- issue 65: one table of commands x bad values, generated. Each class (output paths, seeds, numbers,
+# a damaged store, a damaged or foreign checkpoint, conflicting flags) for every command it applies to.
+
+OUTPUTS = {  # command -> (argv before --out's value, the flag, a good suffix)
+    "body-build": (["body", "build"], "--out", ".pkl"),
+    "body-export": (["body", "export"], "--out", ".obj"),
+    "motion-make": (["motion", "make", "--label", "walk"], "--out", ".npz"),
+    "motion-import": (["motion", "import", "IN/good.bvh", "--label-name", "walk"], "--out", ".npz"),
+    "motion-export": (["motion", "export", "IN/walk.npz", "--format", "bvh"], "--out", ".bvh"),
+    "garment-make": (["garment", "make", "--type", "tshirt"], "--out", ".obj"),
+    "garment-show": (["garment", "make", "--type", "tshirt", "--out", "OUT/t.obj"], "--show", ".png"),
+    "simulate": (["simulate"], "--out", ".npz"),
+    "preview": (["preview", "IN/store", "--sample", "0"], "--out", ".png"),
+    "export-usd": (["export", "usd", "IN/store", "--sample", "0"], "--out", ".usda"),
+    "evaluate-json": (["evaluate", "IN/not_a_store"], "--json", ".json"),
+    "predict": (["predict", "IN/run", "--data", "IN/store", "--sample", "0"], "--out", ".usda"),
+    "sample-clothed": (["sample", "clothed", "--garment-model", "IN/run", "--motion", "IN/walk.npz"], "--out", ".usda"),
+    "sample-clothed-video": (["sample", "clothed", "--garment-model", "IN/run", "--motion", "IN/walk.npz", "--out",
+                              "OUT/a.usda"], "--video", ".mp4"),
+}
+OUTPUT_DIRS = {  # command -> argv before --out's value (a directory the command creates)
+    "generate": ["generate", "IN/configs/micro.json"],
+    "train": ["train", "gnn", "--data", "IN/store"],
+    "refine": ["train", "refine", "--garment-model", "IN/run", "--motion-model", "IN/run"],
+    "sample-motion": ["sample", "motion", "IN/run", "--label", "walk"],
+    "export-usd-all": ["export", "usd", "IN/store", "--all"],
+    "info-plots": ["info", "IN/store"],
+}
+READ_ONLY = "/sys"
+"""A folder no one may create a file in, root included (the tests run as root in CI containers too)."""
+
+TABLE = []
+for name, (argv, flag, suffix) in OUTPUTS.items():
+    TABLE += [(f"{name}-missing-folder", [*argv, flag, f"OUT/nodir/x{suffix}"], 2, ["nodir", "does not exist"], ["nodir"]),
+              (f"{name}-a-directory", [*argv, flag, "OUT"], 2,
+               ["must end in"] if name == "export-usd" else ["is a directory"], []),
+              (f"{name}-read-only", [*argv, flag, f"{READ_ONLY}/x{suffix}"], 2, ["not writable"], []),
+              (f"{name}-wrong-suffix", [*argv, flag, "OUT/x.txt"], 2, ["x.txt", "must end in"], ["x.txt"])]
+for name, argv in OUTPUT_DIRS.items():
+    flag = "--plots" if name == "info-plots" else "--out"
+    TABLE += [(f"{name}-dir-is-a-file", [*argv, flag, "IN/good.bvh"], 2, ["good.bvh", "not a directory"], []),
+              (f"{name}-dir-read-only", [*argv, flag, f"{READ_ONLY}/d"], 2, ["not writable"], [])]
+SEEDS = {"body-build": ["body", "build", "--seed"], "body-export": ["body", "export", "--out", "OUT/b.obj", "--seed"],
+         "body-measure": ["body", "measure", "--seed"],
+         "motion-make": ["motion", "make", "--label", "walk", "--out", "OUT/m.npz", "--seed"],
+         "garment-make": ["garment", "make", "--type", "tshirt", "--out", "OUT/t.obj", "--seed"],
+         "simulate-garment": ["simulate", "--out", "OUT/r.npz", "--garment-seed"],
+         "simulate-motion": ["simulate", "--out", "OUT/r.npz", "--motion-seed"],
+         "refine": ["train", "refine", "--garment-model", "IN/run", "--motion-model", "IN/run", "--out", "OUT/r", "--seed"],
+         "sample-motion": ["sample", "motion", "IN/run", "--label", "walk", "--out", "OUT/g", "--seed"],
+         "sample-clothed": ["sample", "clothed", "--garment-model", "IN/run", "--out", "OUT/a.usda", "--seed"]}
+for name, argv in SEEDS.items():
+    TABLE += [(f"{name}-negative-seed", [*argv, "-1"], 2, [argv[-1], "out of range"], ["b.obj", "m.npz", "t.obj", "r.npz", "r", "g", "a.usda"]),
+              (f"{name}-huge-seed", [*argv, str(2**40)], 2, [argv[-1], "out of range"], []),
+              (f"{name}-seed-not-a-number", [*argv, "abc"], 2, [argv[-1], "not a whole number"], [])]
+NUMBERS = [  # (id, argv, words)
+    ("motion-make-huge-frames", ["motion", "make", "--label", "walk", "--frames", "1000000000", "--out", "OUT/m.npz"],
+     ["--frames 1000000000", "GiB", "fewer frames"]),
+    ("motion-make-nan-fps", ["motion", "make", "--label", "walk", "--fps", "nan", "--out", "OUT/m.npz"], ["--fps", "finite"]),
+    ("simulate-huge-frames", ["simulate", "--frames", "100000", "--out", "OUT/r.npz"], ["--frames 100000", "GiB"]),
+    ("simulate-zero-substeps", ["simulate", "--substeps", "0", "--out", "OUT/r.npz"], ["--substeps"]),
+    ("simulate-inf-fps", ["simulate", "--fps", "inf", "--out", "OUT/r.npz"], ["--fps", "finite"]),
+    ("evaluate-negative-max-frames", ["evaluate", "IN/run", "--max-frames", "-3"], ["--max-frames"]),
+    ("evaluate-zero-repetitions", ["evaluate", "IN/run", "--repetitions", "0"], ["--repetitions"]),
+    ("preview-nan-view", ["preview", "IN/store", "--sample", "0", "--view", "nan", "--out", "OUT/p.png"], ["--view", "finite"]),
+    ("preview-negative-sample", ["preview", "IN/store", "--sample", "-1", "--out", "OUT/p.png"], ["--sample"]),
+    ("preview-zero-clip-fps", ["preview", "IN/store", "--sample", "0", "--frames", "0:2", "--clip-fps", "0", "--out",
+                               "OUT/p.gif"], ["--clip-fps"]),
+    ("export-negative-sample", ["export", "usd", "IN/store", "--sample", "-2", "--out", "OUT/a.usda"], ["--sample"]),
+    ("body-export-negative-frame", ["body", "export", "--frame", "-9", "--out", "OUT/b.obj"], ["--frame"]),
+    ("generate-zero-batch-size", ["generate", "IN/configs/micro.json", "--batch-size", "0", "--out", "OUT/s.zarr"],
+     ["--batch-size"]),
+    ("generate-negative-time-limit", ["generate", "IN/configs/micro.json", "--time-limit", "-1", "--out", "OUT/s.zarr"],
+     ["--time-limit"]),
+    ("train-negative-minutes", ["train", "gnn", "--data", "IN/store", "--max-minutes", "-1", "--out", "OUT/run"],
+     ["--max-minutes"]),
+    ("refine-zero-steps", ["train", "refine", "--garment-model", "IN/run", "--motion-model", "IN/run", "--steps", "0",
+                           "--out", "OUT/r"], ["--steps"]),
+    ("sample-motion-zero-count", ["sample", "motion", "IN/run", "--label", "walk", "--count", "0", "--out", "OUT/g"],
+     ["--count"]),
+    ("sample-motion-huge-frames", ["sample", "motion", "IN/run", "--label", "walk", "--frames", "1000000000", "--out",
+                                   "OUT/g"], ["--frames"]),
+    ("motion-import-nan-scale", ["motion", "import", "IN/good.bvh", "--label-name", "walk", "--scale", "nan", "--out",
+                                 "OUT/m.npz"], ["--scale"]),
+]
+TABLE += [(i, argv, 2, words, ["m.npz", "r.npz", "p.png", "p.gif", "a.usda", "b.obj", "s.zarr", "run", "r", "g"])
+          for i, argv, words in NUMBERS]
+DAMAGED = {  # a reader -> its argv with STORE for the damaged store
+    "preview": ["preview", "STORE", "--sample", "0", "--out", "OUT/p.png"],
+    "export-usd": ["export", "usd", "STORE", "--sample", "0", "--out", "OUT/a.usda"],
+    "export-usd-all": ["export", "usd", "STORE", "--all", "--out", "OUT/all"],
+    "train": ["train", "gnn", "--data", "STORE", "--out", "OUT/run"],
+    "evaluate": ["evaluate", "IN/gnnrun", "--data", "STORE"],
+    "predict": ["predict", "IN/gnnrun", "--data", "STORE", "--sample", "0", "--out", "OUT/p.usda"],
+}
+for damage in ("deleted_array", "metadata_disagrees", "missing_zarr_json", "flipped_shard"):
+    for name, argv in DAMAGED.items():
+        TABLE.append((f"{name}-{damage}", [a.replace("STORE", f"IN/damaged/{damage}") for a in argv], 1,
+                      ["the store is damaged at vertex_frames/detail", "drape validate"], ["p.png", "a.usda", "all", "run", "p.usda"]))
+TABLE.append(("info-metadata_disagrees", ["info", "IN/damaged/metadata_disagrees"], 1, ["DAMAGED", "vertex_frames/detail"], []))
+TABLE += [  # checkpoints: damaged, another model, a run whose store moved
+    ("evaluate-truncated-checkpoint", ["evaluate", "IN/truncated"], 2, ["best.ckpt", "is damaged"], []),
+    ("predict-truncated-checkpoint", ["predict", "IN/truncated", "--data", "IN/store", "--sample", "0", "--out",
+                                      "OUT/p.usda"], 2, ["best.ckpt", "is damaged"], ["p.usda"]),
+    ("resume-truncated-checkpoint", ["train", "gnn", "--data", "IN/store", "--out", "IN/truncated", "--resume"], 2,
+     ["last.ckpt", "is damaged"], []),
+    ("sample-motion-truncated-checkpoint", ["sample", "motion", "IN/truncated_motion", "--label", "walk", "--out",
+                                            "OUT/g"], 2, ["best.ckpt", "is damaged"], ["g"]),
+    ("evaluate-another-model", ["evaluate", "IN/foreign"], 2, ["belongs to another model", "paper 000's gnn"], []),
+    ("predict-another-model", ["predict", "IN/foreign", "--data", "IN/store", "--sample", "0", "--out", "OUT/p.usda"], 2,
+     ["belongs to another model"], ["p.usda"]),
+    ("evaluate-other-shapes", ["evaluate", "IN/other_shapes"], 2, ["other shapes", "in this config's model"], []),
+    ("evaluate-store-moved", ["evaluate", "IN/gnnrun"], 2, ["no longer at", "--data"], []),
+    ("train-resume-and-force", ["train", "gnn", "--data", "IN/store", "--out", "IN/gnnrun", "--resume", "--force"], 2,
+     ["--force", "not allowed with", "--resume"], []),
+    ("train-force-and-resume", ["train", "gnn", "--data", "IN/store", "--out", "OUT/run", "--force",
+                                           "--resume"], 2, ["not allowed with"], ["run"]),
+]
+
+
+def _damage(store: Path, into: Path) -> None:
+    """Copies of ``store`` with one kind of damage each at vertex_frames/detail."""
+    import shutil
+
+    detail = "vertex_frames/detail"
+    for kind in ("deleted_array", "metadata_disagrees", "missing_zarr_json", "flipped_shard"):
+        copy = into / kind
+        shutil.copytree(store, copy)
+        if kind == "deleted_array":
+            shutil.rmtree(copy / detail)
+        elif kind == "missing_zarr_json":
+            (copy / detail / "zarr.json").unlink()
+        elif kind == "metadata_disagrees":
+            f = copy / detail / "zarr.json"
+            m = json.loads(f.read_text())
+            m["shape"][0] -= 5
+            f.write_text(json.dumps(m))
+        else:
+            f = copy / detail / "c" / "0" / "0"
+            b = bytearray(f.read_bytes())
+            b[len(b) // 3:len(b) // 3 + 16] = bytes(x ^ 0xFF for x in b[len(b) // 3:len(b) // 3 + 16])
+            f.write_bytes(bytes(b))
+
+
+def _runs(d: Path) -> None:
+    """Run directories with a GNN checkpoint in Lightning's format (made without training: the weights of a
+    freshly built module) whose store is no longer there, a truncated one, one of another model, one of
+    other shapes, and a truncated motion-generator run."""
+    import torch
+
+    from datagen.store import open_store
+    from training.gnn.config import GNNConfig
+    from training.gnn.module import GNNModule
+    from training.loop import store_identity
+
+    config = GNNConfig()
+    identity = store_identity(open_store(d / "store"))
+
+    def run(name: str, kind: str, state: dict, hyper: dict, store: dict) -> Path:
+        r = d / name
+        (r / "checkpoints").mkdir(parents=True)
+        (r / "run.json").write_text(json.dumps({"kind": kind, "config": config.as_dict(), "store": store}))
+        for ckpt in ("best", "last"):
+            torch.save({"state_dict": state, "hyper_parameters": hyper, "epoch": 1, "global_step": 4,
+                        "optimizer_states": []}, r / "checkpoints" / f"{ckpt}.ckpt")
+        return r
+
+    gnn = GNNModule(config, attribute_features=4)
+    hyper = {"config": config.as_dict(), "attribute_features": 4}
+    run("gnnrun", "gnn", gnn.state_dict(), hyper, {**identity, "path": str(d / "moved.zarr")})
+    for name, kind in (("truncated", "gnn"), ("truncated_motion", "motion")):
+        r = run(name, kind, gnn.state_dict(), hyper, identity)
+        for f in (r / "checkpoints").iterdir():
+            f.write_bytes(f.read_bytes()[: f.stat().st_size // 2])
+    run("foreign", "gnn", {"encoder.layers.0.weight": torch.zeros(3, 3)}, {"labels": ["walk"], "latent": 8}, identity)
+    other = GNNModule(config, attribute_features=9)
+    run("other_shapes", "gnn", other.state_dict(), hyper, identity)
+
+
+@pytest.fixture(scope="module")
+def table_inputs(inputs):
+    """The module's inputs plus damaged stores, run directories and a motion file."""
+    d = inputs
+    if not (d / "damaged").exists():
+        (d / "damaged").mkdir()
+        _damage(d / "store", d / "damaged")
+        _runs(d)
+        np.savez(d / "walk.npz", poses=np.zeros((4, 72)), trans=np.zeros((4, 3)), mocap_framerate=30.0, label="walk")
+        _bad_animations(d)
+    return d
+
+
+def _bad_animations(d: Path) -> None:
+    """Animations of plain arrays with a NaN position or a face out of range, and a prediction with a NaN."""
+    from datagen.store import open_store
+
+    rng = np.random.default_rng(0)
+    v, b = rng.random((3, 10, 3), np.float32), rng.random((3, 12, 3), np.float32)
+    faces, body_faces = np.array([[0, 1, 2], [2, 3, 4]]), np.array([[0, 1, 2]])
+    nan = v.copy()
+    nan[1, 3] = np.nan
+    np.savez(d / "nan_positions.npz", garment_vertices=nan, garment_faces=faces, body_vertices=b, body_faces=body_faces,
+             fps=30.0)
+    np.savez(d / "faces_out_of_range.npz", garment_vertices=v, garment_faces=np.array([[0, 1, 99]]), body_vertices=b,
+             body_faces=body_faces, fps=30.0)
+    store = open_store(d / "store")
+    pred = np.zeros((store.frame_count(0), store.vertex_count(0), 3), np.float32)
+    pred[0, 0, 0] = np.nan
+    np.savez(d / "nan_prediction.npz", garment_vertices=pred)
+
+
+TABLE += [  # animations with NaN positions or faces out of range
+    ("preview-nan-positions", ["preview", "IN/nan_positions.npz", "--frame", "1", "--out", "OUT/p.png"], 2,
+     ["garment_vertices", "non-finite", "frame(s) [1]"], ["p.png"]),
+    ("preview-faces-out-of-range", ["preview", "IN/faces_out_of_range.npz", "--out", "OUT/p.png"], 2,
+     ["garment_faces", "outside 0 .. 9"], ["p.png"]),
+    ("export-nan-positions", ["export", "usd", "IN/nan_positions.npz", "--out", "OUT/a.usda"], 2,
+     ["garment_vertices", "non-finite"], ["a.usda"]),
+    ("export-faces-out-of-range", ["export", "usd", "IN/faces_out_of_range.npz", "--out", "OUT/a.usda"], 2,
+     ["garment_faces", "outside"], ["a.usda"]),
+    ("preview-nan-prediction", ["preview", "IN/store", "--sample", "0", "--prediction", "IN/nan_prediction.npz",
+                                "--color-by", "error", "--out", "OUT/p.png"], 2, ["prediction", "non-finite"], ["p.png"]),
+]
+
+
+@pytest.mark.parametrize("case", TABLE, ids=[c[0] for c in TABLE])
+def test_the_table_of_commands_and_bad_values(case, table_inputs, tmp_path, capsys, monkeypatch):
+    test_bad_input_gets_one_clear_line(case, table_inputs, tmp_path, capsys, monkeypatch)
+
+
+def test_the_table_covers_every_class():
+    assert len(TABLE) >= 150, len(TABLE)

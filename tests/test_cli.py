@@ -72,7 +72,7 @@ def test_export_pose_file(capsys, tmp_path, default_body):
         (["body", "export", "--body", "huge", "--out", "OUT/a.obj"], "unknown body preset 'huge'"),
         (["body", "export", "--betas"] + ["0.1"] * 11 + ["--out", "OUT/a.obj"], "11 β values given; this body has 10"),
         (["body", "export", "--out", "OUT/missing/a.obj"], "does not exist; create it first"),
-        (["body", "export", "--out", "OUT/a.xyz", "--pose", "t-pose"], "unknown mesh format 'xyz'"),
+        (["body", "export", "--out", "OUT/a.xyz", "--pose", "t-pose"], "a.xyz must end in .npz or .obj"),
         (["body", "info", "--model", "OUT/none.pkl"], "does not exist"),
         (["body", "export", "--pose", "OUT/bad.npy", "--out", "OUT/a.obj"], "θ needs 72"),
     ],

@@ -15,6 +15,7 @@ import pytorch_lightning as pl
 import torch
 
 from datagen.errors import InputError
+from datagen.lifetime import die_with_parent_worker as worker_init
 from datagen.store import DatasetStore
 from training.config import BaseConfig
 
@@ -119,7 +120,7 @@ class StoreDataModule(pl.LightningDataModule):
         size = {} if batch_sampler is not None else {
             "batch_size": self.per_process(batch_size) if global_batch else batch_size, "sampler": sampler}
         return DataLoader(ds, **size, batch_sampler=batch_sampler, num_workers=workers, pin_memory=self.on_gpu,
-                          persistent_workers=workers > 0, generator=g,
+                          persistent_workers=workers > 0, generator=g, worker_init_fn=worker_init if workers > 0 else None,
                           multiprocessing_context="spawn" if workers > 0 else None)
 
     def run_meta(self) -> dict[str, Any]:

@@ -208,6 +208,9 @@ def _check_resumable(out: Path) -> Path:
         raise InputError(f"--resume: {out} has no checkpoints/last.ckpt (the run stopped before its first epoch "
                          f"ended, or the file was removed): there is nothing to resume; start the run again with "
                          f"--force")
+    from training.checkpoint import read_checkpoint
+
+    read_checkpoint(last)  # a damaged one is refused before the run directory is touched
     return last
 
 
@@ -237,6 +240,10 @@ def fit(module, data, config: BaseConfig, out: Path, *, device: str = "auto", re
     # save_last writes only when a best one is written)
     latest = _latest_checkpoint(out / "checkpoints", LAST_CHECKPOINT_SECONDS)
     resume_from = str(_check_resumable(out)) if resume else None
+    if resume_from is not None:  # it fits the model this config builds: checked before Lightning restores it
+        from training.checkpoint import check_resume
+
+        check_resume(resume_from, module)
     attempt = len(list((out / "logs" / "csv").glob("attempt-*")))
     trainer = pl.Trainer(
         max_epochs=config.epochs, accelerator=accelerator, devices=local, num_nodes=max(1, world // local),

@@ -64,7 +64,12 @@ _RESUME_HINTS = {
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as exc:  # a refused argument (datagen.cli.args): argparse printed its one line
+        if exc.code == 2:
+            return 2
+        raise  # --help, --version
     logging.basicConfig(level=getattr(logging, args.log_level.upper()), format="%(message)s", stream=sys.stderr)
     for noisy in ("anny", "warp", "trimesh"):
         logging.getLogger(noisy).setLevel(max(logging.WARNING, logging.getLogger().level))

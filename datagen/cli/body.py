@@ -11,6 +11,9 @@ from pathlib import Path
 
 import numpy as np
 
+from datagen.cli import args as checks
+
+MESH_SUFFIXES = (".npz", ".obj", ".ply", ".usd", ".usda", ".usdc")
 
 
 def register(sub, formatter) -> None:
@@ -29,8 +32,8 @@ def register(sub, formatter) -> None:
         epilog="example:\n  drape body build --out body.pkl --subdivide",
     )
     p.add_argument("--config", help="TOML/YAML file with an [anny_body] section (sample_count, seed, shape_dim, age_years, regressor_vertex_count)")
-    p.add_argument("--seed", type=int, default=None, help="seed of the phenotype sampling (overrides the config)")
-    p.add_argument("--out", help="write the model here (.pkl or .npz); default: only build the cache")
+    p.add_argument("--seed", type=checks.seed, default=None, help="seed of the phenotype sampling (overrides the config)")
+    p.add_argument("--out", type=checks.out_file(".pkl", ".npz"), help="write the model here (.pkl or .npz); default: only build the cache")
     p.add_argument("--subdivide", action="store_true", help="write the 4-to-1 subdivided model (paper 000's resolution)")
     p.add_argument("--rebuild", action="store_true", help="ignore the cache and build again")
     p.set_defaults(func=_cmd_build)
@@ -42,9 +45,9 @@ def register(sub, formatter) -> None:
     )
     _model_args(p)
     p.add_argument("--pose", default="t-pose", help="t-pose, a-pose, or a .npy (72 values) / .npz ('poses' [T, 72+], 'trans') file")
-    p.add_argument("--frame", type=int, default=0, help="frame of an .npz pose file")
+    p.add_argument("--frame", type=checks.integer(0), default=0, help="frame of an .npz pose file")
     p.add_argument("--format", choices=["npz", "obj", "ply", "usd"], default=None, help="file format (default: from --out's suffix)")
-    p.add_argument("--out", required=True, help="output file")
+    p.add_argument("--out", required=True, type=checks.out_file(*MESH_SUFFIXES), help="output file")
     p.set_defaults(func=_cmd_export)
 
     p = bsub.add_parser(
@@ -73,8 +76,8 @@ def _model_args(p: argparse.ArgumentParser, shape: bool = True) -> None:
     if shape:
         g = p.add_mutually_exclusive_group()
         g.add_argument("--body", help="a shape preset: thin, regular or fat")
-        g.add_argument("--betas", type=float, nargs="+", help="β values (up to the model's shape dimension)")
-        g.add_argument("--seed", type=int, help="sample β ~ N(0, I) from this seed")
+        g.add_argument("--betas", type=checks.number(), nargs="+", help="β values (up to the model's shape dimension)")
+        g.add_argument("--seed", type=checks.seed, help="sample β ~ N(0, I) from this seed")
 
 
 def _config(args):

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from datagen.cli import args as checks
 from datagen.errors import InputError
 
 logger = logging.getLogger(__name__)
@@ -18,7 +19,7 @@ _SOURCE_HELP = ("a dataset store directory (with --sample), a 'drape simulate' r
 
 def _add_npz_options(p) -> None:
     g = p.add_argument_group("for an .npz of plain arrays without an fps")
-    g.add_argument("--fps", type=float, default=None, help="its frame rate (None: the file's, else 30)")
+    g.add_argument("--fps", type=checks.number(0, above=True), default=None, help="its frame rate (None: the file's, else 30)")
 
 
 def register(sub, formatter) -> None:
@@ -45,10 +46,10 @@ def register(sub, formatter) -> None:
                        "  drape export usd run.npz --out run.usd                        (a drape simulate result)")
     u.add_argument("source", help=_SOURCE_HELP)
     which = u.add_mutually_exclusive_group()
-    which.add_argument("--sample", type=int, default=None, help="sample id of the store")
+    which.add_argument("--sample", type=checks.integer(0), default=None, help="sample id of the store")
     which.add_argument("--split", default=None, help="every sample of this split (train, val, test)")
     which.add_argument("--all", action="store_true", help="every sample of the store")
-    u.add_argument("--out", required=True, help="the .usd/.usda/.usdc file; with --split/--all a directory")
+    u.add_argument("--out", required=True, type=checks.out_path, help="the .usd/.usda/.usdc file; with --split/--all a directory")
     u.add_argument("--format", dest="usd_format", default="usd", choices=("usd", "usda", "usdc"),
                    help="file type of each file written with --split/--all (usd: binary crate)")
     u.add_argument("--skeleton", action="store_true", help="write the body as a UsdSkel skeleton, animation and "
@@ -72,8 +73,8 @@ def register(sub, formatter) -> None:
                        "  drape preview tiny.zarr --sample 5 --view 30 --color-by body-distance --out clip.mp4\n"
                        "  drape preview tiny.zarr --sample 5 --prediction pred.npz --color-by error --out err.png")
     p.add_argument("source", help=_SOURCE_HELP)
-    p.add_argument("--sample", type=int, default=None, help="sample id of the store")
-    p.add_argument("--out", required=True, help="frame.png, or clip.gif / clip.mp4")
+    p.add_argument("--sample", type=checks.integer(0), default=None, help="sample id of the store")
+    p.add_argument("--out", required=True, type=checks.out_file(".png", ".gif", ".mp4"), help="frame.png, or clip.gif / clip.mp4")
     p.add_argument("--frame", default=None, help="the frame of a PNG (default 0)")
     p.add_argument("--frames", default=None, help="frames of a clip: A:B[:step] (default: all)")
     p.add_argument("--view", default="front", help="front, side, back, three-quarter, or an azimuth in degrees")
@@ -84,7 +85,7 @@ def register(sub, formatter) -> None:
     p.add_argument("--prediction", default=None, help="an .npz with garment_vertices [T, V, 3] predicted for the "
                    "sample's T frames: drawn instead of the simulation (needed by --color-by error)")
     p.add_argument("--size", default="512x640", help="picture size WIDTHxHEIGHT in pixels (even numbers)")
-    p.add_argument("--clip-fps", type=float, default=None, help="frame rate of a clip (default: the source's fps "
+    p.add_argument("--clip-fps", type=checks.number(0, above=True), default=None, help="frame rate of a clip (default: the source's fps "
                    "divided by the frame step)")
     _add_npz_options(p)
     p.set_defaults(func=_cmd_preview)
@@ -188,6 +189,9 @@ def _load_prediction(path: str, frame_count: int) -> np.ndarray:
     pred = np.asarray(d["garment_vertices"], np.float32)
     if pred.ndim != 3 or pred.shape[0] != frame_count:
         raise InputError(f"the prediction in {p} has shape {pred.shape}; the sample has {frame_count} frames")
+    if not np.isfinite(pred).all():
+        raise InputError(f"the prediction in {p} has non-finite values (NaN or inf) in frame(s) "
+                         f"{np.flatnonzero(~np.isfinite(pred).all(axis=(1, 2)))[:10].tolist()}")
     return pred
 
 
@@ -229,6 +233,9 @@ def _cmd_preview(args) -> int:
         if args.sample is not None:
             raise InputError(f"{source} is not a store; --sample is for stores")
         full = from_npz(source, **_npz_options(args))
+        from datagen.export.usd import check_animation
+
+        check_animation(full)  # NaN positions or faces out of range: refused before drawing
         T = full.frame_count
         index = parse_frames(spec, T)
         anim = full.frames(index)

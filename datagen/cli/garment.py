@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from datagen.cli import args as checks
 from datagen.errors import InputError
 
 
@@ -37,18 +38,18 @@ def register(sub, formatter) -> None:
     src.add_argument("--pattern", help="a pattern program from `drape garment list`")
     src.add_argument("--spec", help="a GarmentCode specification JSON (GarmentCode's frame stands on the floor; "
                      "files drape wrote are in drape's)")
-    p.add_argument("--seed", type=int, default=0, help="draws the style parameters (the design of a --pattern)")
+    p.add_argument("--seed", type=checks.seed, default=0, help="draws the style parameters (the design of a --pattern)")
     p.add_argument("--body", default="regular", help="body shape preset: thin, regular, fat")
-    p.add_argument("--edge-length", type=float, default=None, help="target edge length (m); default the type's")
+    p.add_argument("--edge-length", type=checks.number(0, above=True), default=None, help="target edge length (m); default the type's")
     p.add_argument("--material", help="material preset (default: the type's)")
     p.add_argument("--param", action="append", default=[], metavar="NAME=VALUE",
                    help="fix a style parameter, or a design parameter of a --pattern (repeatable)")
     p.add_argument("--placement", choices=("wrap", "flat"), default="wrap",
                    help="pattern panels bent around the body (wrap) or flat where the pattern puts them")
-    p.add_argument("--out", required=True, help="output file (.obj, .ply or .npz)")
-    p.add_argument("--show", help="also render the garment on the body, front and side, to this PNG")
-    p.add_argument("--svg", help="--pattern/--spec: draw the panels with their stitches numbered (.svg, or .png)")
-    p.add_argument("--write-spec", help="--pattern/--spec: also write the pattern as GarmentCode specification JSON")
+    p.add_argument("--out", required=True, type=checks.out_file(".obj", ".ply", ".npz"), help="output file (.obj, .ply or .npz)")
+    p.add_argument("--show", type=checks.out_file(".png"), help="also render the garment on the body, front and side, to this PNG")
+    p.add_argument("--svg", type=checks.out_file(".svg", ".png"), help="--pattern/--spec: draw the panels with their stitches numbered (.svg, or .png)")
+    p.add_argument("--write-spec", type=checks.out_file(".json"), help="--pattern/--spec: also write the pattern as GarmentCode specification JSON")
     p.set_defaults(func=_cmd_make)
 
 

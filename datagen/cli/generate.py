@@ -6,6 +6,7 @@ import json
 import sys
 from pathlib import Path
 
+from datagen.cli import args as checks
 from datagen.errors import InputError
 
 
@@ -27,18 +28,19 @@ def register(sub, formatter) -> None:
     p.add_argument("config", nargs="?", default=None, help="dataset config (.toml/.yaml); default: --preset tiny")
     p.add_argument("--preset", default=None, help="tiny (default), small, medium, paper-gnn, paper-motion; NAME-pattern / NAME-shell "
                    "for sewn pattern garments or shells (the plain names: datagen.generate.config.PRESET_GARMENTS)")
-    p.add_argument("--out", required=True, help="the store directory")
+    p.add_argument("--out", required=True, type=checks.out_dir, help="the store directory")
     p.add_argument("--executor", default="local", choices=("local", "ray"))
-    p.add_argument("--workers", type=int, default=None,
+    p.add_argument("--workers", type=checks.workers, default=None,
                    help="local: processes that build garments, compute targets and stage while the simulator runs "
                         "(default: cores - 1, at most 16; 0: none); ray: CPUs of the local Ray cluster (default: every core; "
                         "one task per GPU with --device cuda, else one per CPU)")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N); local executor: several as a "
                    "comma list (cuda:0,cuda:1,...), one simulating process per device, each a share of the scenes")
-    p.add_argument("--time-limit", type=float, default=None, metavar="MINUTES",
+    p.add_argument("--time-limit", type=checks.number(0, above=True), default=None, metavar="MINUTES",
                    help="local executor: start no batch that would not end within this many minutes (judged by the "
                         "last batch); what is simulated stays staged, the same command continues it, and the exit "
                         "status is 75 while the store is unfinished")
+    # --batch-size: checked against the config's limits (1..4096) by with_batch_size, before anything is made
     p.add_argument("--batch-size", type=int, default=None, metavar="N",
                    help="scenes simulated together in one model, in place of the config's simulation.batch_size "
                         "(how the work is spread, not part of the store's identity: a run may be resumed with "
@@ -65,7 +67,7 @@ def register(sub, formatter) -> None:
     p.add_argument("--config", action="store_true",
                    help="print only the config the store was made with (JSON, which is YAML: save it as .yaml and "
                         "give it to drape generate to make the store again)")
-    p.add_argument("--plots", default=None, metavar="DIR", help="also write PNG plots into this directory")
+    p.add_argument("--plots", default=None, type=checks.out_dir, metavar="DIR", help="also write PNG plots into this directory")
     p.add_argument("--samples", action="store_true",
                    help="print only the per-sample table (one line per sample: garment, material, body, motion, "
                         "frames, gates, strain, penetration; all columns in STORE/table/*.parquet)")

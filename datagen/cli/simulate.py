@@ -8,8 +8,15 @@ from pathlib import Path
 
 import numpy as np
 
+from datagen.cli import args as checks
+from datagen.cli.motion import MOTION_BYTES_PER_FRAME
 from datagen.errors import InputError
 from datagen.geometry.topology import unique_edges
+
+
+GARMENT_BYTES_PER_FRAME = 20_000 * 3 * 4 * 2
+"""Host memory of a recorded garment frame [bytes]: up to 20,000 vertices (the largest garment drape
+builds), float32 positions, a copy when they are stacked."""
 
 
 def register(sub, formatter) -> None:
@@ -23,17 +30,17 @@ def register(sub, formatter) -> None:
     p.add_argument("--pattern", default=None, metavar="NAME[:SEED]",
                    help="a sewing-pattern program instead of --garment (`drape garment list`), its design drawn by "
                    "SEED (default 0): placed around the body, sewn and settled at rest, then simulated")
-    p.add_argument("--garment-seed", type=int, default=0, help="seed of the garment's style parameters")
+    p.add_argument("--garment-seed", type=checks.seed, default=0, help="seed of the garment's style parameters")
     p.add_argument("--body", default="regular", help="body shape preset: thin, regular, fat")
     p.add_argument("--motion", default="walk", help="motion label (`drape motion list`)")
-    p.add_argument("--motion-seed", type=int, default=0, help="seed of the motion's style parameters")
-    p.add_argument("--frames", type=int, default=120, help="recorded frames")
-    p.add_argument("--fps", type=float, default=30.0, help="frame rate")
-    p.add_argument("--substeps", type=int, default=None, help="substeps per frame (default: the solver's, 10)")
-    p.add_argument("--iterations", type=int, default=None, help="sweeps per substep (default: the solver's, 20)")
+    p.add_argument("--motion-seed", type=checks.seed, default=0, help="seed of the motion's style parameters")
+    p.add_argument("--frames", type=checks.count, default=120, help="recorded frames")
+    p.add_argument("--fps", type=checks.fps, default=30.0, help="frame rate")
+    p.add_argument("--substeps", type=checks.integer(1, 1000), default=None, help="substeps per frame (default: the solver's, 10)")
+    p.add_argument("--iterations", type=checks.integer(1, 1000), default=None, help="sweeps per substep (default: the solver's, 20)")
     p.add_argument("--no-self-collision", action="store_true", help="turn cloth self-collision off")
     p.add_argument("--device", default="cpu", help="warp device: cpu or cuda (cuda:N)")
-    p.add_argument("--out", required=True, help="output .npz: the garment and body of every recorded frame, the garment's rest mesh "
+    p.add_argument("--out", required=True, type=checks.out_file(".npz"), help="output .npz: the garment and body of every recorded frame, the garment's rest mesh "
                    "and panels, the body's rig, metric_* per simulated frame (`drape export usd` and `drape preview` "
                    "read it as it is)")
     p.set_defaults(func=_cmd_simulate)
@@ -63,6 +70,10 @@ def _cmd_simulate(args) -> int:
     given = {k: v for k, v in (("substeps", args.substeps), ("iterations", args.iterations)) if v is not None}
     config = RunConfig(solver=SolverConfig(steps=StepConfig(**given),
                                            self_contact=SelfContactConfig(enabled=not args.no_self_collision)))
+    frames = config.motion_frames(args.frames, args.fps)  # simulated: the lead-in and settling included
+    # the posed body of every frame (float64 with the skinning's copies), the motion, the recorded garment
+    checks.check_memory(frames * (model.vertex_count * 3 * 8 * 4 + MOTION_BYTES_PER_FRAME + GARMENT_BYTES_PER_FRAME),
+                        f"--frames {args.frames} ({frames} simulated)", "simulate fewer frames")
     sewn = None
     if args.pattern:
         garment, sewn, name = _sewn_pattern(args.pattern, model, betas, config, device)

@@ -3,23 +3,28 @@
 
 from __future__ import annotations
 
+import contextlib
 import json
+import shutil
 import sys
 from pathlib import Path
+
+from datagen.cli import args as checks
 
 
 def _run_arguments(p, config_class: str) -> None:
     """The arguments every `drape train MODEL` takes."""
     p.add_argument("--data", required=True, help="the dataset store")
-    p.add_argument("--out", required=True, help="the run directory")
+    p.add_argument("--out", required=True, type=checks.out_dir, help="the run directory")
     p.add_argument("--config", default=None, help=f"training config (.toml/.yaml/.json; fields of {config_class})")
-    p.add_argument("--epochs", type=int, default=None, help="most epochs (overrides the config)")
-    p.add_argument("--max-minutes", type=float, default=None,
+    p.add_argument("--epochs", type=checks.count, default=None, help="most epochs (overrides the config)")
+    p.add_argument("--max-minutes", type=checks.number(0, above=True), default=None,
                    help="wall-time limit in minutes (overrides the config); with --resume the limit counts the "
                         "time already trained, so give the new total")
     p.add_argument("--device", default="auto", help="cpu, cuda or auto")
-    p.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
-    p.add_argument("--force", action="store_true", help="replace the run in --out")
+    again = p.add_mutually_exclusive_group()  # both together: refused before the run directory is touched
+    again.add_argument("--resume", action="store_true", help="continue the run in --out from its last checkpoint")
+    again.add_argument("--force", action="store_true", help="replace the run in --out")
 
 
 def _train_config(cls, args, **overrides):
@@ -61,10 +66,10 @@ def register(sub, formatter) -> None:
                           "--out runs/skirt-refined")
     f.add_argument("--garment-model", required=True)
     f.add_argument("--motion-model", required=True)
-    f.add_argument("--out", required=True, help="the refined run directory")
-    f.add_argument("--samples", type=int, default=64, help="motions sampled for the fine-tuning")
-    f.add_argument("--steps", type=int, default=200, help="optimiser steps (one sequence each)")
-    f.add_argument("--seed", type=int, default=0)
+    f.add_argument("--out", required=True, type=checks.out_dir, help="the refined run directory")
+    f.add_argument("--samples", type=checks.count, default=64, help="motions sampled for the fine-tuning")
+    f.add_argument("--steps", type=checks.count, default=200, help="optimiser steps (one sequence each)")
+    f.add_argument("--seed", type=checks.seed, default=0)
     f.add_argument("--device", default="auto")
     f.add_argument("--force", action="store_true", help="replace the run in --out")
     f.add_argument("--latent", default="posterior", choices=("posterior", "prior"),
@@ -82,10 +87,10 @@ def register(sub, formatter) -> None:
     s.add_argument("--label", required=True,
                    help="one of the labels the model was trained on; several separated by commas, or all (each "
                         "label's motions then go into OUT/<label>/, the model loaded once)")
-    s.add_argument("--count", type=int, default=8)
-    s.add_argument("--seed", type=int, default=0)
-    s.add_argument("--out", required=True, help="a directory for the .npz files")
-    s.add_argument("--frames", type=int, default=None,
+    s.add_argument("--count", type=checks.integer(1, 100_000), default=8)
+    s.add_argument("--seed", type=checks.seed, default=0)
+    s.add_argument("--out", required=True, type=checks.out_dir, help="a directory for the .npz files")
+    s.add_argument("--frames", type=checks.integer(2, 100_000), default=None,
                    help="frames per motion (default: the segment length it was trained on). `drape generate` "
                         "with file: motions needs the recorded frames plus the ramp (e.g. 75 for 60 recorded)")
     s.add_argument("--device", default="cpu", help="cpu, cuda or auto")
@@ -111,9 +116,9 @@ def register(sub, formatter) -> None:
     c.add_argument("--motion-model", default=None, help="a run directory of `drape train motion` (with --label)")
     c.add_argument("--label", default=None, help="the motion's label (sampled from --motion-model)")
     c.add_argument("--motion", default=None, help="a motion .npz to dress instead of a sampled one")
-    c.add_argument("--seed", type=int, default=0)
-    c.add_argument("--out", required=True, help="a .usd/.usda/.usdc file")
-    c.add_argument("--video", default=None, help="also render a .mp4 or .gif of it")
+    c.add_argument("--seed", type=checks.seed, default=0)
+    c.add_argument("--out", required=True, type=checks.out_file(".usd", ".usda", ".usdc"), help="a .usd/.usda/.usdc file")
+    c.add_argument("--video", default=None, type=checks.out_file(".mp4", ".gif"), help="also render a .mp4 or .gif of it")
     c.add_argument("--device", default="cpu", help="cpu, cuda or auto")
     c.add_argument("--no-push-out", action="store_true",
                    help="keep garment vertices that end inside the body (no post-process)")
@@ -133,10 +138,10 @@ def register(sub, formatter) -> None:
     p.add_argument("run", help="a run directory of `drape train`")
     p.add_argument("--data", default=None, help="the store (default: the one it trained on)")
     p.add_argument("--split", default="test", choices=("train", "val", "test"))
-    p.add_argument("--max-frames", type=int, default=None, help="evaluate this many frames, drawn evenly")
+    p.add_argument("--max-frames", type=checks.count, default=None, help="evaluate this many frames, drawn evenly")
     p.add_argument("--device", default="auto")
-    p.add_argument("--json", default=None, metavar="FILE", help="also write the figures as JSON")
-    p.add_argument("--repetitions", type=int, default=20,
+    p.add_argument("--json", default=None, type=checks.out_file(".json"), metavar="FILE", help="also write the figures as JSON")
+    p.add_argument("--repetitions", type=checks.integer(1, 10_000), default=20,
                    help="motion generator: generated sets drawn for Table 4's figures (paper: 20)")
     p.add_argument("--no-generation", action="store_true",
                    help="motion generator: Table 3's reconstruction only (no recogniser, no generated sets)")
@@ -148,9 +153,10 @@ def register(sub, formatter) -> None:
                        "for `drape preview STORE --sample ID --prediction PRED.npz --color-by error`.")
     p.add_argument("run")
     p.add_argument("--data", required=True)
-    p.add_argument("--sample", type=int, required=True)
-    p.add_argument("--out", required=True, help="a .usd/.usda/.usdc file (the .npz goes beside it)")
-    p.add_argument("--max-error", type=float, default=30.0, help="error (mm) shown as the hottest colour")
+    p.add_argument("--sample", type=checks.integer(0), required=True)
+    p.add_argument("--out", required=True, type=checks.out_file(".usd", ".usda", ".usdc"),
+                   help="a .usd/.usda/.usdc file (the .npz goes beside it)")
+    p.add_argument("--max-error", type=checks.number(0, above=True), default=30.0, help="error (mm) shown as the hottest colour")
     p.set_defaults(func=_cmd_predict)
 
 
@@ -170,12 +176,36 @@ def _cmd_train(args) -> int:
 
     kind = get_kind(args.kind)
     config = _train_config(kind.config_class(), args, **kind.overrides(args))
-    result = kind.part("train")(args.data, args.out, config, device=args.device, resume=args.resume, force=args.force)
+    if args.force and (Path(args.out) / "run.json").is_file():
+        # --force deletes the run there: every shard the new run reads is checked first, so that a damaged
+        # store is refused while the old run is still there
+        from datagen.store import open_store
+
+        open_store(args.data).check_files()
+    with _kept_only_if_started(Path(args.out)):
+        result = kind.part("train")(args.data, args.out, config, device=args.device, resume=args.resume,
+                                    force=args.force)
     report = kind.part("report")
     print(report(result, config) if report is not None else
           f"trained {result['epochs']} epochs in {result['seconds']:.0f} s; best validation value {result['best']} "
           f"({result['best_checkpoint']})")
     return _diverged(result, config)
+
+
+@contextlib.contextmanager
+def _kept_only_if_started(out: Path):
+    """A run directory that this command created is removed again when the command is refused (a
+    :class:`~datagen.errors.DrapeError`, e.g. a damaged store found by a DataLoader worker) before the
+    run wrote its first checkpoint: a refusal leaves nothing behind. One that was there is left as it is."""
+    from datagen.errors import DrapeError
+
+    existed = out.exists()
+    try:
+        yield
+    except DrapeError:
+        if not existed and out.is_dir() and not any((out / "checkpoints").glob("*.ckpt")):
+            shutil.rmtree(out, ignore_errors=True)
+        raise
 
 
 def _cmd_refine(args) -> int:
@@ -185,8 +215,9 @@ def _cmd_refine(args) -> int:
         from datagen.errors import InputError
 
         raise InputError(f"--seed must be 0 or more, got {args.seed}")
-    r = refine_garment(args.garment_model, args.motion_model, args.out, samples=args.samples, steps=args.steps,
-                       seed=args.seed, device=args.device, force=args.force, latent=args.latent)
+    with _kept_only_if_started(Path(args.out)):
+        r = refine_garment(args.garment_model, args.motion_model, args.out, samples=args.samples, steps=args.steps,
+                           seed=args.seed, device=args.device, force=args.force, latent=args.latent)
     print(f"refined {args.garment_model} into {args.out}: {r['steps']} steps on {r['sampled'] - r['dropped']} sampled "
           f"motions ({r['dropped']} dropped for heavy interpenetration), loss {r['loss_first']:.4f} -> "
           f"{r['loss_last']:.4f}; garment vertices inside the body on {r['held_out']} held-out sampled motions: "

@@ -22,6 +22,7 @@ temporary name and renamed. GIFs are written with Pillow (matplotlib's own depen
 from __future__ import annotations
 
 import logging
+import math
 import os
 from dataclasses import dataclass
 from pathlib import Path
@@ -64,9 +65,12 @@ def parse_view(view: str | float) -> float:
     if view in VIEWS:
         return VIEWS[view]
     try:
-        return float(view)
+        azimuth = float(view)
     except ValueError:
         raise InputError(f"unknown view {view!r}: give one of {', '.join(VIEWS)} or an azimuth in degrees") from None
+    if not math.isfinite(azimuth):
+        raise InputError(f"--view {view!r} is not a finite azimuth: give one of {', '.join(VIEWS)} or degrees")
+    return azimuth
 
 
 def parse_size(size: str | tuple[int, int]) -> tuple[int, int]:

@@ -227,6 +227,14 @@ def _faces(name: str, f, V: int) -> np.ndarray:
     return f
 
 
+def check_animation(anim) -> None:
+    """Refuse (:class:`InputError`) an animation whose positions are not finite [T, V, 3] floats or whose
+    faces index vertices it has not: the checks the USD writer runs, for readers that draw it too."""
+    _faces("garment_faces", anim.garment_faces, _frames("garment_vertices", anim.garment_vertices).shape[1])
+    if anim.body_vertices is not None:
+        _faces("body_faces", anim.body_faces, _frames("body_vertices", anim.body_vertices).shape[1])
+
+
 def _custom_value(value):
     from pxr import Vt
 

@@ -113,6 +113,9 @@ def pin_gpu(device: str | None) -> str | None:
 
 def _device_process(config_dict, out, indices, device, workers, task, seconds_left, messages) -> None:
     """A device's process: its share, progress and its result (or its error) as messages."""
+    from datagen.lifetime import die_with_parent
+
+    die_with_parent()  # a kill -9 of drape generate ends this process (and so its own workers) too
     t0 = time.perf_counter()
     name, device = device, pin_gpu(device)
 

@@ -107,6 +107,9 @@ _WORKER: dict = {}
 
 def _init_worker(config, out: str) -> None:
     from datagen.generate.plan import open_writer
+    from datagen.lifetime import die_with_parent
+
+    die_with_parent()  # a kill -9 of drape generate ends this worker too
 
     # one BLAS thread per worker: the workers themselves are the parallelism
     os.environ.setdefault("OMP_NUM_THREADS", "1")

@@ -22,6 +22,10 @@ def _sew_worker_init(config, devices) -> None:
     import contextlib
     import os
 
+    from datagen.lifetime import die_with_parent
+
+    die_with_parent()  # a kill -9 of drape generate ends this worker too
+
     from datagen.generate.devices import pin_gpu
 
     device = pin_gpu(devices.get())

@@ -19,7 +19,7 @@ import numpy as np
 
 from datagen.errors import InputError
 from datagen.store.layout import MARKER, STAGING, directory_bytes, parse_sample_dir_name, read_root_attributes
-from schemas.dataset import SPLIT_NAMES, STATIC_GROUPS, STORE_FORMAT
+from schemas.dataset import ARRAYS, SPLIT_NAMES, STATIC_GROUPS, STORE_FORMAT
 
 
 def store_info(path: str | Path) -> dict[str, Any]:
@@ -96,6 +96,13 @@ def store_info(path: str | Path) -> dict[str, Any]:
     from datagen.store.validation import file_problems
 
     info["damage"] = file_problems(path, attrs, meta, quick=True)[0]  # missing shard files (cheap)
+    from datagen.store.integrity import metadata_problem
+
+    consolidated = (meta.get("consolidated_metadata") or {}).get("metadata") or {}
+    for name in ARRAYS:  # an array whose zarr.json is gone or disagrees with the consolidated copy (cheap)
+        problem = metadata_problem(path, name, consolidated.get(name)) if name in consolidated else None
+        if problem and not any(name in d for d in info["damage"]):
+            info["damage"].append(f"{name}: {problem}")
     ff = idx["failure_frame"]
     info["failures"] = _failure_rows(failure, split, ff, failure_names)
     return info

@@ -8,17 +8,27 @@ the root attribute ``checksums``; :func:`shard_problem` compares a file with it.
 :class:`ShardGuard` runs that comparison the first time a reader touches a shard (one digest of
 the file per shard per process and open store, then nothing), and raises
 :class:`DamagedStoreError` for a shard that is missing, has no digest, or differs.
+
+It is also the one place where what the storage libraries raise becomes that one line: an array
+whose own ``zarr.json`` is missing or disagrees with the store's consolidated metadata
+(:meth:`ShardGuard.check_metadata`), and any error tensorstore or zarr raise while opening or reading
+an array (DATA_LOSS, NOT_FOUND, a codec's error: :func:`storage_errors`).
 """
 
 from __future__ import annotations
 
+import contextlib
+import json
+import logging
 import threading
+from collections.abc import Iterator
 from pathlib import Path
 
-from datagen.errors import InputError
+from datagen.errors import DrapeError, InputError
 from datagen.store.layout import file_digest, shard_keys
 from schemas.dataset import ARRAYS
 
+log = logging.getLogger(__name__)
 
 MISSING = "is missing"
 """:func:`shard_problem` of a shard file that is not there (a read would give the fill value)."""
@@ -29,6 +39,56 @@ class DamagedStoreError(InputError):
     it is data. The CLI exits with status 1 (the store is bad, as ``drape validate`` says), not 2."""
 
     exit_status = 1
+
+
+def damaged(store: Path, array: str, where: str) -> DamagedStoreError:
+    """The one refusal of a damaged store: ``array``, what is wrong there (``where``: a shard and its
+    rows, or the array's metadata) and the command that lists every damaged file."""
+    return DamagedStoreError(
+        f"the store is damaged at {array} ({where}): run `drape validate {store}` (it lists every damaged file), "
+        "then restore the store from a copy or make it again; nothing was read from it")
+
+
+READ_KEYS = ("shape", "data_type", "chunk_grid", "chunk_key_encoding", "codecs", "fill_value")
+"""The keys of an array's zarr v3 metadata that say how its bytes are read: the array's own
+``zarr.json`` and the store's consolidated copy must agree on them."""
+
+
+def metadata_problem(store: Path, array: str, consolidated: dict | None) -> str | None:
+    """What is wrong with the metadata of ``array`` (None: its ``zarr.json`` is there, readable, and
+    agrees with the consolidated copy ``consolidated`` on :data:`READ_KEYS`)."""
+    if consolidated is None:
+        return "it is not in the store's consolidated metadata (zarr.json at the root)"
+    f = store / array / "zarr.json"
+    if not f.is_file():
+        return "its zarr.json is missing" if (store / array).is_dir() else "its directory is missing"
+    try:
+        own = json.loads(f.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        return f"its zarr.json cannot be read ({exc})"
+    if not isinstance(own, dict):
+        return "its zarr.json is not a JSON object"
+    different = [k for k in READ_KEYS if own.get(k) != consolidated.get(k)]
+    if different:
+        k = different[0]
+        return (f"its zarr.json disagrees with the store's consolidated metadata on {', '.join(different)}: "
+                f"{k} {json.dumps(own.get(k))[:80]} against {json.dumps(consolidated.get(k))[:80]}")
+    return None
+
+
+@contextlib.contextmanager
+def storage_errors(store: Path, array: str) -> Iterator[None]:
+    """Turn an error the storage libraries raise while opening or reading ``array`` (tensorstore's
+    DATA_LOSS or NOT_FOUND, zarr's missing node, a codec that cannot decode) into the one line of
+    :func:`damaged`; drape's own errors pass as they are."""
+    try:
+        yield
+    except DrapeError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - whatever the libraries raise about the bytes they read
+        log.debug("reading %s of %s failed", array, store, exc_info=True)
+        first = (str(exc).strip().splitlines() or [type(exc).__name__])[0]
+        raise damaged(store, array, f"reading it failed: {type(exc).__name__}: {first[:200]}") from exc
 
 
 def shard_problem(store: Path, array: str, key: str, recorded: dict, *, digest: bool = True) -> str | None:
@@ -77,13 +137,26 @@ class ShardGuard:
         attrs = root_metadata.get("attributes") or {}
         self.recorded = attrs.get("checksums") if isinstance(attrs.get("checksums"), dict) else {}
         self.layout: dict[str, tuple[list[int], list[int], set[str]]] = {}
+        self.consolidated: dict[str, dict] = {}
         for name in ARRAYS:
             m = consolidated.get(name)
             if m and m.get("node_type") == "array":
                 shape, shard = shard_rows(m)
                 self.layout[name] = (shape, shard, set(shard_keys(shape, shard)))
+                self.consolidated[name] = m
         self.verified: set[tuple[str, int]] = set()
+        self.metadata_verified: set[str] = set()
         self._lock = threading.Lock()
+
+    def check_metadata(self, array: str) -> None:
+        """Refuse (:class:`DamagedStoreError`) an array whose ``zarr.json`` is missing or disagrees with
+        the consolidated metadata (once per array: the backends open an array once)."""
+        if array in self.metadata_verified:
+            return
+        problem = metadata_problem(self.store, array, self.consolidated.get(array))
+        if problem:
+            raise damaged(self.store, array, problem)
+        self.metadata_verified.add(array)
 
     def check(self, array: str, start: int | None = None, stop: int | None = None) -> None:
         """Refuse (:class:`DamagedStoreError`) if a shard holding rows ``start:stop`` (all by default)
@@ -107,8 +180,5 @@ class ShardGuard:
                 problem = shard_problem(self.store, array, key, self.recorded)
                 if problem:
                     last = min((k + 1) * shard[0], n) - 1
-                    raise DamagedStoreError(
-                        f"the store is damaged at {array} (shard {key}, rows {k * shard[0]} .. {last}: its file {problem}): "
-                        f"run `drape validate {self.store}` (it lists every damaged file), then restore the store "
-                        "from a copy or make it again; nothing was read from that shard")
+                    raise damaged(self.store, array, f"shard {key}, rows {k * shard[0]} .. {last}: its file {problem}")
                 self.verified.add((array, k))

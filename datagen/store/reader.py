@@ -29,7 +29,7 @@ import numpy as np
 
 from datagen.errors import InputError
 from datagen.geometry.positions import decode_positions
-from datagen.store.integrity import ShardGuard
+from datagen.store.integrity import ShardGuard, storage_errors
 from datagen.store.layout import design_record, read_root_metadata
 from schemas.dataset import (
     ARRAYS,
@@ -132,7 +132,9 @@ class _TensorstoreRows:
 
 class _CheckedRows:
     """A backend's row reads, each shard checked against its recorded digest before its first read
-    (:class:`~datagen.store.integrity.ShardGuard`)."""
+    (:class:`~datagen.store.integrity.ShardGuard`), with the array's metadata checked against the
+    consolidated copy on its first open and what the backend raises turned into the damaged-store line
+    (:func:`~datagen.store.integrity.storage_errors`)."""
 
     def __init__(self, rows, guard: ShardGuard):
         self.rows = rows
@@ -140,16 +142,22 @@ class _CheckedRows:
         self.name = rows.name
 
     def array(self, path: str):
-        return self.rows.array(path)
+        self.guard.check_metadata(path)
+        with storage_errors(self.guard.store, path):
+            return self.rows.array(path)
 
     def read_many(self, requests: Sequence[tuple[str, int, int]]) -> list[np.ndarray]:
         for p, a, b in requests:
+            self.guard.check_metadata(p)
             self.guard.check(p, a, b)
-        return self.rows.read_many(requests)
+        with storage_errors(self.guard.store, ", ".join(sorted({p for p, _, _ in requests}))):
+            return self.rows.read_many(requests)
 
     def read_all(self, path: str) -> np.ndarray:
+        self.guard.check_metadata(path)
         self.guard.check(path)
-        return self.rows.read_all(path)
+        with storage_errors(self.guard.store, path):
+            return self.rows.read_all(path)
 
 
 def _backend(name: str):
@@ -259,6 +267,7 @@ class DatasetStore:
         refuse before it writes anything. Raises :class:`~datagen.store.integrity.DamagedStoreError`."""
         guard = self.rows.guard
         for a in ARRAYS.values():
+            guard.check_metadata(a.path)  # an array's zarr.json missing or disagreeing: refused here too
             if a.written_by != "stage_sample" or samples is None:
                 guard.check(a.path)
         if samples is None:

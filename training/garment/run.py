@@ -22,6 +22,7 @@ from datagen.errors import InputError
 from datagen.store import open_store
 from training.garment.config import GarmentConfig
 from training.garment.data import GarmentDataModule, template_segments
+from training.checkpoint import load_module, run_store
 from training.loop import (apply_threads, fit, prepare_run, resolve_device, run_checkpoint, seed_everything,
                            store_identity, write_summary)
 from training.paper001.data import SegmentDataset
@@ -85,11 +86,10 @@ def load_garment(run: str | Path, *, checkpoint: str = "best", data: str | Path 
     from training.garment.module import GarmentModule
 
     meta, path = run_checkpoint(run, KIND, "paper 001's garment regressor", checkpoint=checkpoint)
-    store = open_store(data or meta["store"]["path"])
+    store = run_store(meta, run, data)
     faces = store.garment(int(meta["template"]))["faces"]
-    module = GarmentModule.load_from_checkpoint(path, map_location="cpu", faces=faces)
+    module = load_module(GarmentModule, path, "paper 001's garment regressor", faces=faces)
     module.binding = store.binding(int(meta["template"]))
-    module.eval()
     return module, meta, path, store
 
 

@@ -20,9 +20,12 @@ import numpy as np
 import torch
 
 from datagen.errors import InputError
+from datagen.lifetime import die_with_parent_worker
 from datagen.store import open_store
 from training.gnn.config import GNNConfig
 from training.gnn.data import FrameDataset
+from training.checkpoint import load_module as load_checkpoint
+from training.checkpoint import run_store
 from training.loop import (apply_threads, fit, prepare_run, resolve_device, run_checkpoint, seed_everything,
                            store_identity, write_summary)
 
@@ -57,8 +60,7 @@ def load_module(run: str | Path, *, checkpoint: str = "best"):
     from training.gnn.module import GNNModule
 
     meta, path = run_checkpoint(run, KIND, "paper 000's GNN", checkpoint=checkpoint)
-    module = GNNModule.load_from_checkpoint(path, map_location="cpu")
-    module.eval()
+    module = load_checkpoint(GNNModule, path, "paper 000's GNN")
     return module, meta, path
 
 
@@ -72,7 +74,7 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     from torch_geometric.utils import scatter
 
     module, meta, ckpt = load_module(run)
-    store = open_store(data or meta["store"]["path"])
+    store = run_store(meta, run, data)
     accelerator = resolve_device(device)
     dev = torch.device("cuda" if accelerator == "gpu" else "cpu")
     module.to(dev)
@@ -97,7 +99,8 @@ def evaluate_gnn(run: str | Path, *, data: str | Path | None = None, split: str 
     # the run's DataLoader workers read and derive the frames (spawned: each opens the store itself)
     workers = int(meta["config"].get("workers", 0))
     loader = DataLoader(ds, batch_size=4, shuffle=False, num_workers=workers,
-                        multiprocessing_context="spawn" if workers else None)
+                        multiprocessing_context="spawn" if workers else None,
+                        worker_init_fn=die_with_parent_worker if workers else None)
     for batch in loader:
         batch = batch.to(dev)
         t = time.perf_counter()

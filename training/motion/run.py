@@ -33,6 +33,7 @@ import torch
 
 from datagen.errors import InputError
 from datagen.store import open_store
+from training.checkpoint import load_module, run_store
 from training.loop import (apply_threads, fit, prepare_run, resolve_device, run_checkpoint, seed_everything,
                            store_identity, write_summary)
 from training.motion.config import MotionConfig
@@ -74,9 +75,8 @@ def load_motion(run: str | Path, *, checkpoint: str = "best", data: str | Path |
     from training.motion.module import MotionModule
 
     meta, path = run_checkpoint(run, KIND, "paper 001's motion generator", checkpoint=checkpoint)
-    store = open_store(data or meta["store"]["path"])
-    module = MotionModule.load_from_checkpoint(path, map_location="cpu", body=store.body_model(), betas=store.betas())
-    module.eval()
+    store = run_store(meta, run, data)
+    module = load_module(MotionModule, path, "paper 001's motion generator", body=store.body_model(), betas=store.betas())
     return module, meta, path, store
 
 
