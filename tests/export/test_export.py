@@ -440,14 +440,14 @@ def test_bad_sample_split_and_paths_are_clear_errors(store_path, store, tmp_path
     valid = f"valid sample ids are 0 .. {n - 1}"
     for argv, msg in (
         (["export", "usd", store_path, "--sample", n + 3, "--out", tmp_path / "a.usd"], valid),
-        (["export", "usd", store_path, "--sample", -1, "--out", tmp_path / "a.usd"], "valid sample ids"),
+        (["export", "usd", store_path, "--sample", -1, "--out", tmp_path / "a.usd"], "-1 is out of range: give 0 or more"),
         (["export", "usd", store_path, "--split", "holdout", "--out", tmp_path / "d"], "unknown split 'holdout'"),
         (["export", "usd", store_path, "--sample", 0, "--out", tmp_path / "missing" / "a.usd"], "does not exist"),
         (["export", "usd", store_path, "--sample", 0, "--out", tmp_path / "a.txt"], "must end in one of"),
         (["export", "usd", store_path, "--out", tmp_path / "a.usd"], "--sample ID, --split NAME or --all"),
         (["preview", store_path, "--sample", n, "--out", tmp_path / "p.png"], valid),
         (["preview", store_path, "--sample", 0, "--out", tmp_path / "missing" / "p.png"], "does not exist"),
-        (["preview", store_path, "--sample", 0, "--out", tmp_path / "p.jpg"], "must end in one of .png, .gif, .mp4"),
+        (["preview", store_path, "--sample", 0, "--out", tmp_path / "p.jpg"], "p.jpg must end in .png or .gif or .mp4"),
         (["preview", store_path, "--sample", 0, "--view", "top", "--out", tmp_path / "p.png"], "unknown view"),
     ):
         code, _, err = run(capsys, *argv)
