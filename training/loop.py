@@ -114,7 +114,7 @@ def prepare_run(out: str | Path, *, resume: bool, force: bool, meta: dict[str, A
         if different:
             raise InputError(f"--resume: {out} was trained with another {', '.join(different)} "
                              f"(stored {', '.join(f'{k}={stored.get(k)!r:.80}' for k in different)}); resume with "
-                             f"the same command (only {' and '.join(RESUME_MAY_CHANGE)} may change), or give a new "
+                             f"the same command (only {', '.join(RESUME_MAY_CHANGE[:-1])} and {RESUME_MAY_CHANGE[-1]} may change), or give a new "
                              "--out")
         _check_resumable(out)
         if stored != meta:

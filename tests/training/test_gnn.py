@@ -144,7 +144,7 @@ def test_bad_input_gets_one_clear_line(train_store, trained, tmp_path):
     with pytest.raises(InputError, match="asked for a GPU but torch sees none") if not torch.cuda.is_available() \
             else contextlib.nullcontext():
         train_gnn(train_store, tmp_path / "gpu", GNNConfig(**QUICK), device="cuda")
-    with pytest.raises(InputError, match="trained with another config.*only epochs and max_minutes may change"):
+    with pytest.raises(InputError, match="trained with another config.*only epochs, max_minutes and threads may change"):
         train_gnn(train_store, run, GNNConfig(**{**QUICK, "lr": 0.5}), device="cpu", resume=True)
     with pytest.raises(ConfigError, match="ablation = 'nope' is not allowed"):
         load_config(GNNConfig, {"ablation": "nope"})
