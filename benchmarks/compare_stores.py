@@ -21,7 +21,8 @@ from benchmarks.common import Benchmark
 from schemas.dataset import ARRAYS, POSITION_QUANTUM
 
 TIMING = ("samples/seconds",)
-IGNORED_ATTRIBUTES = ("checksums",)
+IGNORED_ATTRIBUTES = ("checksums", "provenance")
+"""Root attributes that record the run, not the data: shard digests and where, when and how long it ran."""
 
 
 def compare(a: Path, b: Path, skip=TIMING) -> dict:
