@@ -177,21 +177,6 @@ fps = _named(number(1, 240, what=" frames per second"), "fps")
 """An argparse type: a frame rate, 1 .. 240 frames per second."""
 
 
-def available_memory() -> int | None:
-    """Host memory that can be had without swapping [bytes]; None when it cannot be told."""
-    try:
-        with open("/proc/meminfo") as fh:
-            for line in fh:
-                if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
-    try:
-        return int(os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
-    except (ValueError, OSError, AttributeError):
-        return None
-
-
 def check_memory(need_bytes: float, what: str, advice: str) -> None:
     """Refuse (:class:`~datagen.errors.InputError`) work whose arrays would take more host memory than
     is available, before anything is allocated.
@@ -201,7 +186,9 @@ def check_memory(need_bytes: float, what: str, advice: str) -> None:
         what: what needs it (``"--frames 100000"``).
         advice: what to do instead.
     """
-    free = available_memory()
+    from datagen.sim.device import available_ram  # light: no warp
+
+    free = available_ram()
     if free is not None and need_bytes > free:
         raise InputError(f"{what} needs about {need_bytes / 2**30:,.1f} GiB of memory and this machine has "
                          f"{free / 2**30:,.1f} GiB available; {advice}")
