@@ -237,14 +237,6 @@ def _size_category(n: int) -> str:
     return next((name for bound, name in SIZE_CATEGORIES if n < bound), "n>1T")
 
 
-def _bytes(n: float) -> str:
-    for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
-        if abs(n) < 1024 or unit == "TiB":
-            return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
-        n /= 1024
-    return str(n)
-
-
 def _num(x, fmt: str = ".3g") -> str:
     return "-" if x is None else format(x, fmt)
 
@@ -275,6 +267,8 @@ def pictures(path: Path) -> list[str]:
 def render_card(facts: dict[str, Any], picture_files: list[str]) -> str:
     """The card's text (``README.md``) from :func:`card_facts` and the pictures beside it."""
     import yaml
+
+    from datagen.store.info import human_bytes  # here: info imports validation, which imports this module
 
     name = facts["name"]
     splits = {s: r for s, r in facts["splits"].items() if r["samples"]}
@@ -308,8 +302,8 @@ def render_card(facts: dict[str, Any], picture_files: list[str]) -> str:
             f"{sum(f['instances'] for f in facts['families'])} garment instances of "
             f"{facts['garment_vertices'][0]}-{facts['garment_vertices'][1]} vertices; "
             f"{len(facts['bodies'])} bodies; {sum(m['motions'] for m in facts['motions'])} motions",
-            f"- {_bytes(facts['size_on_disk'])} on disk ({_bytes(facts['uncompressed'])} uncompressed)"
-            + (f", {_bytes(facts['bytes_per_garment_frame'])} per garment-frame"
+            f"- {human_bytes(facts['size_on_disk'])} on disk ({human_bytes(facts['uncompressed'])} uncompressed)"
+            + (f", {human_bytes(facts['bytes_per_garment_frame'])} per garment-frame"
                if facts.get("bytes_per_garment_frame") else ""),
             "- a zarr v3 store (schema version "
             f"{facts['schema_version']}); per-sample table `table/{{split}}.parquet`; Croissant description "

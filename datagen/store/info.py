@@ -188,7 +188,8 @@ def _staging_info(path: Path, attrs: dict, failure_names: list[str]) -> dict[str
                                       failure_names)}
 
 
-def _bytes(n: int) -> str:
+def human_bytes(n: float) -> str:
+    """``n`` bytes as B, KiB, MiB, GiB or TiB (one decimal above B)."""
     for unit in ("B", "KiB", "MiB", "GiB", "TiB"):
         if abs(n) < 1024 or unit == "TiB":
             return f"{n:.0f} {unit}" if unit == "B" else f"{n:.1f} {unit}"
@@ -222,7 +223,7 @@ def format_store_info(info: dict[str, Any]) -> str:
         return "\n".join([*lines, info["outdated"]])
     if not info["complete"]:
         lines.append(f"staged {info['staged']} samples, missing {info['missing']}; static groups staged: "
-                     f"{', '.join(info['static_staged']) or 'none'}; {_bytes(info['size_on_disk'])} on disk")
+                     f"{', '.join(info['static_staged']) or 'none'}; {human_bytes(info['size_on_disk'])} on disk")
     else:
         cols = ("samples", "ok", "failed", "frames", "sim_frames", "segments", "garment_instances", "bodies", "motions")
         heads = ("samples", "ok", "failed", "frames", "sim frames", "segments", "garments", "bodies", "motions")
@@ -236,11 +237,11 @@ def format_store_info(info: dict[str, Any]) -> str:
         lines += ["", f"{'group':<15}{'on disk':>12}{'uncompressed':>14}{'ratio':>8}"]
         for group, sz in info["sizes"].items():
             ratio = sz["uncompressed"] / sz["on_disk"] if sz["on_disk"] else float("nan")
-            lines.append(f"{group:<15}{_bytes(sz['on_disk']):>12}{_bytes(sz['uncompressed']):>14}{ratio:>8.2f}")
-        lines.append(f"{'total':<15}{_bytes(info['size_on_disk']):>12}"
-                     f"{_bytes(sum(v['uncompressed'] for v in info['sizes'].values())):>14}")
+            lines.append(f"{group:<15}{human_bytes(sz['on_disk']):>12}{human_bytes(sz['uncompressed']):>14}{ratio:>8.2f}")
+        lines.append(f"{'total':<15}{human_bytes(info['size_on_disk']):>12}"
+                     f"{human_bytes(sum(v['uncompressed'] for v in info['sizes'].values())):>14}")
         if info.get("bytes_per_garment_frame"):
-            lines.append(f"per stored garment-frame (vertex_frames + frames): {_bytes(info['bytes_per_garment_frame'])}")
+            lines.append(f"per stored garment-frame (vertex_frames + frames): {human_bytes(info['bytes_per_garment_frame'])}")
         lines += [""] + _garment_lines(info.get("garments"))
         lines += [""] + _fit_lines(info.get("fit") or {})
         if info.get("damage"):
